@@ -1,0 +1,148 @@
+#include "app/runner.hpp"
+
+#include "core/error.hpp"
+#include "dynamics/system.hpp"
+#include "io/checkpoint.hpp"
+#include "io/files.hpp"
+#include "io/monitors.hpp"
+#include "io/progress.hpp"
+#include "io/summary.hpp"
+#include "io/vtk_writer.hpp"
+#include "kiln/version.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <fmt/format.h>
+#include <memory>
+
+namespace kiln::app {
+
+namespace {
+
+/// Steps between events of period `interval` (s); 0 when the event is off.
+long every(double interval, double dt) {
+    if (interval <= 0.0) {
+        return 0;
+    }
+    return std::max(1L, std::lround(interval / dt));
+}
+
+} // namespace
+
+int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
+    io::make_directory(opt.out_dir);
+    io::write_text_file(opt.out_dir / "case.resolved.toml",
+                        fmt::format("# kiln {} (git {}), resolved from {}\n# every default filled in; "
+                                    "runs as it stands with `kiln run`\n\n{}",
+                                    kiln::version, kiln::git_hash, spec.source_file, spec.resolved_toml));
+
+    std::unique_ptr<dynamics::System> sys;
+    try {
+        sys = std::make_unique<dynamics::System>(spec.scene);
+    } catch (const InputError& e) {
+        throw InputError(spec.source_file + ": " + e.what());
+    }
+    if (!opt.restart.empty()) {
+        sys->restore_state(io::read_checkpoint(opt.restart));
+    }
+    const auto& ts = sys->time_step_report();
+    for (const auto& w : sys->warnings()) {
+        fmt::print(stderr, "kiln: warning: {}\n", w);
+    }
+    const double dt = sys->dt();
+    const long total = std::lround(spec.run.end_time / dt);
+    const long vtk_every = every(spec.output.vtk_interval, dt);
+    const long mon_every = every(spec.output.monitor_interval, dt);
+    const long ckp_every = every(spec.output.checkpoint_interval, dt);
+    constexpr long finite_check_every = 1000;
+
+    if (!opt.quiet) {
+        fmt::print("kiln {}: case '{}', {} particles, {} walls, {} steps of {:.3g} s\n", kiln::version,
+                   spec.run.name, sys->particles().size(), spec.scene.walls.size(), total - sys->step_count(),
+                   dt);
+        fmt::print("  critical step: Rayleigh {:.3g} s, contact time {:.3g} s (dt = {:.2g} of the smaller)\n",
+                   ts.rayleigh, ts.contact_time, dt / ts.limit);
+    }
+
+    io::ParticleSeriesWriter vtk(opt.out_dir);
+    if (!spec.scene.walls.empty()) {
+        vtk.write_walls(spec.scene, opt.out_dir / "walls.vtp");
+    }
+    io::MonitorWriter monitors(opt.out_dir / "monitors.csv", spec.output.monitors);
+    io::Progress progress(spec.run.end_time, spec.output.progress && !opt.quiet);
+
+    io::RunSummary summary;
+    summary.case_name = spec.run.name;
+    summary.case_file = spec.source_file;
+    summary.kiln_version = kiln::version;
+    summary.git_hash = kiln::git_hash;
+    summary.warnings = sys->warnings();
+    summary.time_step = dt;
+    summary.rayleigh_time_step = ts.rayleigh;
+    summary.contact_time = ts.contact_time;
+    summary.status = "completed";
+
+    const long first = sys->step_count();
+    if (vtk_every > 0) {
+        vtk.write(*sys);
+    }
+    monitors.write(*sys);
+    const auto t0 = std::chrono::steady_clock::now();
+    int code = 0;
+    try {
+        while (sys->step_count() < total) {
+            sys->step();
+            const long s = sys->step_count();
+            if (s % finite_check_every == 0) {
+                sys->check_finite();
+            }
+            if (mon_every > 0 && s % mon_every == 0) {
+                monitors.write(*sys);
+            }
+            if (vtk_every > 0 && s % vtk_every == 0) {
+                vtk.write(*sys);
+            }
+            if (ckp_every > 0 && s % ckp_every == 0) {
+                io::write_checkpoint(opt.out_dir / "checkpoint.bin", sys->save_state());
+            }
+            progress.update(sys->time(), s - first);
+        }
+        sys->check_finite();
+    } catch (const RunError& e) {
+        summary.status = std::string("failed: ") + e.what();
+        code = 3;
+        vtk.write(*sys);
+    }
+    progress.finish();
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+    summary.steps = sys->step_count() - first;
+    summary.particles = static_cast<long>(sys->particles().size());
+    summary.simulated_time = sys->time();
+    summary.wall_seconds = wall;
+    summary.particle_steps_per_second =
+        wall > 0.0 ? static_cast<double>(summary.steps) * static_cast<double>(summary.particles) / wall : 0.0;
+    summary.neighbour_builds = sys->neighbour_builds();
+    for (const auto& name : spec.output.monitors) {
+        summary.final_monitors.emplace_back(name, io::monitor_value(*sys, name));
+    }
+    io::write_summary_json(opt.out_dir / "summary.json", summary);
+    if (code == 0 && spec.output.checkpoint_interval > 0.0) {
+        io::write_checkpoint(opt.out_dir / "checkpoint.bin", sys->save_state());
+    }
+
+    if (!opt.quiet) {
+        fmt::print("  {}: {} steps in {:.2f} s wall, {:.3g} particle-steps/s\n", summary.status,
+                   summary.steps, wall, summary.particle_steps_per_second);
+        for (const auto& [name, value] : summary.final_monitors) {
+            fmt::print("  final {:<18} {:.6g}\n", name, value);
+        }
+        fmt::print("  output: {} (open particles.pvd in ParaView)\n", opt.out_dir.string());
+    }
+    if (code != 0) {
+        fmt::print(stderr, "kiln: {}\n", summary.status);
+    }
+    return code;
+}
+
+} // namespace kiln::app

@@ -1,0 +1,21 @@
+#pragma once
+// Runs a case from start to end with output, monitors, checkpoints and a summary.
+
+#include "io/case_spec.hpp"
+
+#include <filesystem>
+
+namespace kiln::app {
+
+/// Options of `kiln run`.
+struct RunOptions {
+    std::filesystem::path out_dir;  ///< output folder
+    std::filesystem::path restart;  ///< checkpoint to continue from (empty = fresh start)
+    bool quiet = false;             ///< no progress line, no summary on stdout
+};
+
+/// Runs the case; returns the process exit code (0 = completed). Input errors propagate as
+/// InputError; a numerical failure is recorded in summary.json and returns 3.
+int run_case(const io::CaseSpec& spec, const RunOptions& opt);
+
+} // namespace kiln::app

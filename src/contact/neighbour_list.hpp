@@ -1,0 +1,58 @@
+#pragma once
+// Broad phase: linked cells build a half Verlet list (each pair once) with a skin; the list is rebuilt
+// when any particle has moved more than half the skin since the last build. Each list entry carries
+// the pair's tangential contact history, which is carried over to the new list on rebuild.
+
+#include "core/particle_store.hpp"
+
+#include <cstdint>
+#include <vector>
+
+namespace kiln::contact {
+
+/// Half neighbour list in compressed rows: the partners of particle i are j[offsets[i] .. offsets[i+1]).
+class NeighbourList {
+  public:
+    /// `skin` is the extra distance (m) added to r_i + r_j when building.
+    explicit NeighbourList(double skin = 0.0) : skin_(skin) {}
+
+    /// True when some particle moved more than skin/2 since the last build, or the size changed.
+    [[nodiscard]] bool needs_rebuild(const ParticleStore& p) const;
+
+    /// Rebuilds the list. When `sort` is set, the store is first reordered by cell for locality and
+    /// the applied order (new k <- old order[k]) is returned so other per-particle data can follow;
+    /// otherwise the returned vector is empty. Contact history is carried over by particle id.
+    std::vector<std::uint32_t> build(ParticleStore& p, bool sort);
+
+    /// Row offsets, size n+1.
+    [[nodiscard]] const std::vector<std::uint32_t>& offsets() const { return offsets_; }
+    /// Partner indices (j > i is not guaranteed; each unordered pair appears once).
+    [[nodiscard]] const std::vector<std::uint32_t>& partners() const { return partners_; }
+    /// Tangential history per entry (m, world; displacement of i relative to j).
+    [[nodiscard]] std::vector<Vec3>& shear() { return shear_; }
+    [[nodiscard]] const std::vector<Vec3>& shear() const { return shear_; }
+    /// Skin distance (m).
+    [[nodiscard]] double skin() const { return skin_; }
+    /// Number of builds so far.
+    [[nodiscard]] long builds() const { return builds_; }
+
+    /// Restores a saved list exactly (checkpoint); positions at the last build included.
+    void restore(std::vector<std::uint32_t> offsets, std::vector<std::uint32_t> partners,
+                 std::vector<Vec3> shear, std::vector<Vec3> x_at_build,
+                 std::vector<std::int64_t> ids_at_build, long builds);
+    /// Positions at the last build (m, world), for checkpoints.
+    [[nodiscard]] const std::vector<Vec3>& positions_at_build() const { return x_build_; }
+
+  private:
+    double skin_;
+    long builds_ = 0;
+    std::vector<std::uint32_t> offsets_{0};
+    std::vector<std::uint32_t> partners_;
+    std::vector<Vec3> shear_;
+    std::vector<Vec3> x_build_;
+    // Scratch reused between builds.
+    std::vector<std::uint32_t> cell_of_, cell_start_, order_, old_row_of_id_;
+    std::vector<std::int64_t> old_ids_;
+};
+
+} // namespace kiln::contact

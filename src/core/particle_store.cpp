@@ -1,0 +1,55 @@
+#include "core/particle_store.hpp"
+
+#include <numbers>
+
+namespace kiln {
+
+std::size_t ParticleStore::add_sphere(std::int64_t pid, std::int32_t mat, double r, double density,
+                                      const Vec3& pos, const Vec3& vel, const Vec3& ang_vel) {
+    const double m = density * 4.0 / 3.0 * std::numbers::pi * r * r * r;
+    id.push_back(pid);
+    material.push_back(mat);
+    radius.push_back(r);
+    mass.push_back(m);
+    inv_mass.push_back(1.0 / m);
+    inv_inertia.push_back(1.0 / (0.4 * m * r * r));
+    x.push_back(pos);
+    v.push_back(vel);
+    omega.push_back(ang_vel);
+    force.emplace_back(Vec3::Zero());
+    torque.emplace_back(Vec3::Zero());
+    return x.size() - 1;
+}
+
+void ParticleStore::permute(const std::vector<std::uint32_t>& order) {
+    {
+        std::vector<std::int64_t> s;
+        permute_array(id, order, s);
+    }
+    {
+        std::vector<std::int32_t> s;
+        permute_array(material, order, s);
+    }
+    std::vector<double> sd;
+    permute_array(radius, order, sd);
+    permute_array(mass, order, sd);
+    permute_array(inv_mass, order, sd);
+    permute_array(inv_inertia, order, sd);
+    std::vector<Vec3> sv;
+    permute_array(x, order, sv);
+    permute_array(v, order, sv);
+    permute_array(omega, order, sv);
+    permute_array(force, order, sv);
+    permute_array(torque, order, sv);
+}
+
+void ParticleStore::clear_forces() {
+    for (auto& f : force) {
+        f.setZero();
+    }
+    for (auto& t : torque) {
+        t.setZero();
+    }
+}
+
+} // namespace kiln

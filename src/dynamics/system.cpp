@@ -1,0 +1,310 @@
+#include "dynamics/system.hpp"
+
+#include "contact/contact_law.hpp"
+#include "core/error.hpp"
+#include "dynamics/time_step.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+#include <limits>
+#include <sstream>
+
+namespace kiln::dynamics {
+
+System::System(const SceneSpec& spec)
+    : spec_(spec), pairs_(spec.materials, spec.pairs), nl_(spec.skin), rng_(spec.seed) {
+    if (spec_.skin <= 0.0) {
+        double rmax = 0.0;
+        for (const auto& ps : spec_.particles) {
+            rmax = std::max(rmax, ps.radius);
+        }
+        for (const auto& ins : spec_.inserts) {
+            rmax = std::max(rmax, ins.size.largest());
+        }
+        spec_.skin = 0.2 * rmax; // 10 % of the largest diameter
+        nl_ = contact::NeighbourList(spec_.skin);
+    }
+    for (const auto& ps : spec_.particles) {
+        add_particle(ps.material, ps.radius, ps.x, ps.v, ps.omega);
+    }
+    for (const auto& ins : spec_.inserts) {
+        insert(ins);
+    }
+    check_time_step();
+    refresh();
+}
+
+std::size_t System::add_particle(int material, double radius, const Vec3& x, const Vec3& v,
+                                 const Vec3& omega) {
+    const double rho = spec_.materials.at(static_cast<std::size_t>(material)).density;
+    const std::size_t i = p_.add_sphere(next_id_++, material, radius, rho, x, v, omega);
+    wall_shear_.resize(p_.size() * spec_.walls.size(), Vec3::Zero());
+    list_valid_ = false;
+    return i;
+}
+
+void System::check_time_step() {
+    if (p_.size() == 0) {
+        return;
+    }
+    // Smallest particle per material, bounding box of the particles, fastest initial motion.
+    std::vector<double> rmin(spec_.materials.size(), std::numeric_limits<double>::infinity());
+    Vec3 lo = p_.x[0];
+    Vec3 hi = p_.x[0];
+    double vmax = 0.0;
+    for (std::size_t i = 0; i < p_.size(); ++i) {
+        auto& r = rmin[static_cast<std::size_t>(p_.material[i])];
+        r = std::min(r, p_.radius[i]);
+        lo = lo.cwiseMin(p_.x[i]);
+        hi = hi.cwiseMax(p_.x[i]);
+        vmax = std::max(vmax, p_.v[i].norm() + p_.omega[i].norm() * p_.radius[i]);
+    }
+    double speed = spec_.expected_speed;
+    if (speed <= 0.0) {
+        // Fall across the whole particle cloud plus the largest initial speed (closing speed of two).
+        speed = 2.0 * vmax + std::sqrt(2.0 * spec_.gravity.norm() * (hi - lo).norm());
+    }
+    ts_.impact_speed = speed;
+    ts_.rayleigh = std::numeric_limits<double>::infinity();
+    ts_.contact_time = std::numeric_limits<double>::infinity();
+    for (std::size_t a = 0; a < rmin.size(); ++a) {
+        if (!std::isfinite(rmin[a])) {
+            continue;
+        }
+        const Material& m = spec_.materials[a];
+        ts_.rayleigh = std::min(ts_.rayleigh, rayleigh_time_step(rmin[a], m.density, m.shear_modulus(),
+                                                                 m.poisson_ratio));
+        for (std::size_t b = 0; b < rmin.size(); ++b) {
+            if (!std::isfinite(rmin[b])) {
+                continue;
+            }
+            const double r1 = rmin[a];
+            const double r2 = rmin[b];
+            const double m1 = m.density * 4.18879020478639 * r1 * r1 * r1;
+            const double m2 = spec_.materials[b].density * 4.18879020478639 * r2 * r2 * r2;
+            const double meff = m1 * m2 / (m1 + m2);
+            const PairProperties& pp = pairs_.at(static_cast<int>(a), static_cast<int>(b));
+            double tc = 0.0;
+            if (const auto* lin = std::get_if<contact::LinearSpringDashpot>(&spec_.contact.law)) {
+                tc = linear_contact_time(meff, lin->stiffness, pp.beta);
+            } else {
+                tc = hertz_contact_time(meff, r1 * r2 / (r1 + r2), pp.effective_modulus, speed);
+            }
+            ts_.contact_time = std::min(ts_.contact_time, tc);
+        }
+    }
+    ts_.limit = std::min(ts_.rayleigh, ts_.contact_time);
+    const double dt = spec_.time_step;
+    const std::string figures = fmt::format(
+        "time step {:.3g} s; Rayleigh step {:.3g} s, shortest contact {:.3g} s (impact speed {:.3g} m/s)",
+        dt, ts_.rayleigh, ts_.contact_time, ts_.impact_speed);
+    // Fewer than 5 steps per contact, or a step above the Rayleigh step, is not a usable simulation.
+    const bool unsafe = dt > ts_.rayleigh || dt > ts_.contact_time / 5.0;
+    if (unsafe && !spec_.allow_unsafe_time_step) {
+        throw InputError("", 0, "simulation.time_step",
+                         figures + "; the step must be below the Rayleigh step and a fifth of the "
+                                   "contact time (set simulation.allow_unsafe_time_step = true to "
+                                   "run anyway)");
+    }
+    if (unsafe || dt > spec_.time_step_fraction * ts_.limit) {
+        warnings_.push_back(fmt::format("{}; above {} of the critical step {:.3g} s", figures,
+                                        spec_.time_step_fraction, ts_.limit));
+    }
+}
+
+void System::rebuild_neighbours() {
+    const std::vector<std::uint32_t> order = nl_.build(p_, spec_.sort_particles);
+    if (!order.empty() && !spec_.walls.empty()) {
+        const std::size_t nw = spec_.walls.size();
+        std::vector<Vec3> s(wall_shear_.size());
+        for (std::size_t k = 0; k < order.size(); ++k) {
+            for (std::size_t w = 0; w < nw; ++w) {
+                s[k * nw + w] = wall_shear_[order[k] * nw + w];
+            }
+        }
+        wall_shear_.swap(s);
+    }
+    list_valid_ = true;
+}
+
+void System::refresh() {
+    rebuild_neighbours();
+    compute_forces();
+}
+
+template <class Law>
+void System::pair_forces(const Law& law) {
+    const auto& off = nl_.offsets();
+    const auto& nb = nl_.partners();
+    auto& shear = nl_.shear();
+    const double dt = spec_.time_step;
+    const std::size_t n = p_.size();
+    for (std::size_t i = 0; i < n; ++i) {
+        const Vec3 xi = p_.x[i];
+        const double ri = p_.radius[i];
+        for (std::uint32_t k = off[i]; k < off[i + 1]; ++k) {
+            const std::uint32_t j = nb[k];
+            const Vec3 d = xi - p_.x[j];
+            const double rsum = ri + p_.radius[j];
+            const double d2 = d.squaredNorm();
+            if (d2 >= rsum * rsum) {
+                shear[k].setZero();
+                continue;
+            }
+            const double dist = std::sqrt(d2);
+            const double overlap = rsum - dist;
+            contact::ContactInput c;
+            c.n = d / dist;
+            c.overlap = overlap;
+            c.r_eff = ri * p_.radius[j] / rsum;
+            c.m_eff = p_.mass[i] * p_.mass[j] / (p_.mass[i] + p_.mass[j]);
+            c.lever_i = ri - 0.5 * overlap;
+            c.lever_j = p_.radius[j] - 0.5 * overlap;
+            c.v_rel = p_.v[i] - p_.v[j];
+            c.omega_i = p_.omega[i];
+            c.omega_j = p_.omega[j];
+            const PairProperties& pp = pairs_.at(p_.material[i], p_.material[j]);
+            const contact::ContactOutput o = contact::evaluate(law, spec_.contact, pp, c, shear[k], dt);
+            p_.force[i] += o.force;
+            p_.force[j] -= o.force;
+            p_.torque[i] += o.torque_i;
+            p_.torque[j] += o.torque_j;
+            ++counters_.particle_contacts;
+            counters_.elastic_energy += o.elastic_energy;
+            counters_.max_overlap_ratio =
+                std::max(counters_.max_overlap_ratio, overlap / (2.0 * std::min(ri, p_.radius[j])));
+        }
+    }
+}
+
+template <class Law>
+void System::wall_forces(const Law& law) {
+    const std::size_t nw = spec_.walls.size();
+    const double dt = spec_.time_step;
+    for (std::size_t w = 0; w < nw; ++w) {
+        const Wall& wall = spec_.walls[w];
+        for (std::size_t i = 0; i < p_.size(); ++i) {
+            const double r = p_.radius[i];
+            const WallContact wc =
+                std::visit([&](const auto& shape) { return wall_contact(shape, p_.x[i], r); }, wall.shape);
+            Vec3& shear = wall_shear_[i * nw + w];
+            if (wc.overlap <= 0.0) {
+                shear.setZero();
+                continue;
+            }
+            contact::ContactInput c;
+            c.n = wc.n;
+            c.overlap = wc.overlap;
+            c.r_eff = wc.r_eff;
+            c.m_eff = p_.mass[i];
+            c.lever_i = r - wc.overlap;
+            c.lever_j = 0.0;
+            c.v_rel = p_.v[i];
+            c.omega_i = p_.omega[i];
+            c.omega_j = Vec3::Zero();
+            const PairProperties& pp = pairs_.at(p_.material[i], wall.material);
+            const contact::ContactOutput o = contact::evaluate(law, spec_.contact, pp, c, shear, dt);
+            p_.force[i] += o.force;
+            p_.torque[i] += o.torque_i;
+            ++counters_.wall_contacts;
+            counters_.elastic_energy += o.elastic_energy;
+            counters_.max_overlap_ratio = std::max(counters_.max_overlap_ratio, wc.overlap / (2.0 * r));
+        }
+    }
+}
+
+void System::compute_forces() {
+    p_.clear_forces();
+    counters_ = ContactCounters{};
+    std::visit(
+        [&](const auto& law) {
+            pair_forces(law);
+            wall_forces(law);
+        },
+        spec_.contact.law);
+}
+
+void System::step() {
+    if (!list_valid_) {
+        refresh();
+    }
+    const double dt = spec_.time_step;
+    const double h = 0.5 * dt;
+    const Vec3 g = spec_.gravity;
+    const std::size_t n = p_.size();
+    for (std::size_t i = 0; i < n; ++i) {
+        p_.v[i] += h * (p_.force[i] * p_.inv_mass[i] + g);
+        p_.omega[i] += h * p_.inv_inertia[i] * p_.torque[i];
+        p_.x[i] += dt * p_.v[i];
+    }
+    if (nl_.needs_rebuild(p_)) {
+        rebuild_neighbours();
+    }
+    compute_forces();
+    for (std::size_t i = 0; i < n; ++i) {
+        p_.v[i] += h * (p_.force[i] * p_.inv_mass[i] + g);
+        p_.omega[i] += h * p_.inv_inertia[i] * p_.torque[i];
+    }
+    ++step_;
+    time_ = static_cast<double>(step_) * dt;
+}
+
+void System::check_finite() const {
+    for (std::size_t i = 0; i < p_.size(); ++i) {
+        if (!p_.x[i].allFinite() || !p_.v[i].allFinite() || !p_.omega[i].allFinite()) {
+            throw RunError(step_, fmt::format("particle {} has a non-finite position or velocity; the "
+                                              "time step is probably too large for the contact stiffness",
+                                              p_.id[i]));
+        }
+    }
+}
+
+Energies System::energies() const {
+    Energies e;
+    for (std::size_t i = 0; i < p_.size(); ++i) {
+        e.kinetic += 0.5 * p_.mass[i] * p_.v[i].squaredNorm();
+        e.rotational += 0.5 * p_.omega[i].squaredNorm() / p_.inv_inertia[i];
+        e.potential -= p_.mass[i] * spec_.gravity.dot(p_.x[i]);
+    }
+    e.elastic = counters_.elastic_energy;
+    return e;
+}
+
+SystemState System::save_state() const {
+    SystemState s;
+    s.particles = p_;
+    s.nl_offsets = nl_.offsets();
+    s.nl_partners = nl_.partners();
+    s.nl_shear = nl_.shear();
+    s.nl_x_build = nl_.positions_at_build();
+    s.nl_ids = p_.id;
+    s.nl_builds = nl_.builds();
+    s.wall_shear = wall_shear_;
+    s.time = time_;
+    s.step = step_;
+    s.next_id = next_id_;
+    s.counters = counters_;
+    std::ostringstream os;
+    os << rng_;
+    s.rng = os.str();
+    return s;
+}
+
+void System::restore_state(SystemState s) {
+    p_ = std::move(s.particles);
+    nl_.restore(std::move(s.nl_offsets), std::move(s.nl_partners), std::move(s.nl_shear),
+                std::move(s.nl_x_build), std::move(s.nl_ids), s.nl_builds);
+    wall_shear_ = std::move(s.wall_shear);
+    time_ = s.time;
+    step_ = s.step;
+    next_id_ = s.next_id;
+    std::istringstream is(s.rng);
+    is >> rng_;
+    counters_ = s.counters;
+    list_valid_ = true;
+    // Forces and torques of the last step are part of the store; recomputing them here would advance
+    // the tangential histories a second time and break the exact continuation.
+}
+
+} // namespace kiln::dynamics

@@ -1,0 +1,125 @@
+#pragma once
+// The mechanical system: particles, walls and contacts advanced by velocity Verlet.
+
+#include "contact/neighbour_list.hpp"
+#include "core/particle_store.hpp"
+#include "dynamics/scene_spec.hpp"
+
+#include <random>
+#include <string>
+#include <vector>
+
+namespace kiln::dynamics {
+
+/// Counters of the last force evaluation.
+struct ContactCounters {
+    long particle_contacts = 0;    ///< touching particle pairs
+    long wall_contacts = 0;        ///< touching particle-wall pairs
+    double elastic_energy = 0;     ///< energy stored in normal springs (J)
+    double max_overlap_ratio = 0;  ///< largest overlap / smaller diameter (-)
+};
+
+/// Energies of the system (J).
+struct Energies {
+    double kinetic = 0;     ///< sum 1/2 m v^2
+    double rotational = 0;  ///< sum 1/2 I omega^2
+    double potential = 0;   ///< sum -m g.x (zero at the world origin)
+    double elastic = 0;     ///< normal springs of all contacts
+    /// Sum of all four (J).
+    [[nodiscard]] double total() const { return kinetic + rotational + potential + elastic; }
+};
+
+/// Critical time-step figures computed from the materials (s).
+struct TimeStepReport {
+    double rayleigh = 0;      ///< smallest Rayleigh step over the particles present (s)
+    double contact_time = 0;  ///< shortest expected contact duration (s)
+    double impact_speed = 0;  ///< speed used for the Hertz estimate (m/s)
+    double limit = 0;         ///< min(rayleigh, contact_time) (s)
+};
+
+/// Everything that evolves during a run: enough to continue it exactly.
+struct SystemState {
+    ParticleStore particles;
+    std::vector<std::uint32_t> nl_offsets, nl_partners;
+    std::vector<Vec3> nl_shear, nl_x_build;
+    std::vector<std::int64_t> nl_ids;
+    long nl_builds = 0;
+    std::vector<Vec3> wall_shear;
+    double time = 0;
+    long step = 0;
+    std::int64_t next_id = 0;
+    ContactCounters counters;
+    std::string rng;  ///< textual state of the random stream (std::mt19937_64 operator<<)
+};
+
+/// Particles, walls and contacts with a velocity-Verlet integrator.
+class System {
+  public:
+    /// Builds the scene: materials, walls, insertion, time-step check. Throws InputError when the
+    /// scene cannot be built (no room to insert, time step above the critical limit, ...).
+    explicit System(const SceneSpec& spec);
+
+    /// Advances one mechanical step of length dt.
+    void step();
+
+    /// Particle data (world frame).
+    [[nodiscard]] const ParticleStore& particles() const { return p_; }
+    /// Mutable particle data; call `refresh()` after changing positions or adding particles.
+    ParticleStore& particles() { return p_; }
+    /// Recomputes neighbour list and forces after external changes to the particles.
+    void refresh();
+    /// Simulated time (s).
+    [[nodiscard]] double time() const { return time_; }
+    /// Steps taken.
+    [[nodiscard]] long step_count() const { return step_; }
+    /// Mechanical time step (s).
+    [[nodiscard]] double dt() const { return spec_.time_step; }
+    /// Counters from the last force evaluation.
+    [[nodiscard]] const ContactCounters& counters() const { return counters_; }
+    /// Current energies (J).
+    [[nodiscard]] Energies energies() const;
+    /// Warnings produced while setting up (for the log and summary).
+    [[nodiscard]] const std::vector<std::string>& warnings() const { return warnings_; }
+    /// Critical time-step figures.
+    [[nodiscard]] const TimeStepReport& time_step_report() const { return ts_; }
+    /// The scene this system was built from.
+    [[nodiscard]] const SceneSpec& spec() const { return spec_; }
+    /// Number of neighbour-list builds so far.
+    [[nodiscard]] long neighbour_builds() const { return nl_.builds(); }
+    /// Checks that positions and velocities are finite; throws RunError otherwise.
+    void check_finite() const;
+
+    /// Copies out the full evolving state (checkpoint).
+    [[nodiscard]] SystemState save_state() const;
+    /// Replaces the evolving state with a saved one (restart); the run continues bit for bit.
+    void restore_state(SystemState s);
+
+    /// Adds one particle; returns its index. The neighbour list is rebuilt at the next step.
+    std::size_t add_particle(int material, double radius, const Vec3& x, const Vec3& v, const Vec3& omega);
+
+  private:
+    void insert(const InsertSpec& ins);
+    void check_time_step();
+    void compute_forces();
+    template <class Law>
+    void pair_forces(const Law& law);
+    template <class Law>
+    void wall_forces(const Law& law);
+    void rebuild_neighbours();
+
+    SceneSpec spec_;
+    PairTable pairs_;
+    ParticleStore p_;
+    contact::NeighbourList nl_;
+    std::vector<Vec3> wall_shear_;  // [particle * n_walls + wall]
+    ContactCounters counters_;
+    TimeStepReport ts_;
+    std::vector<std::string> warnings_;
+    std::mt19937_64 rng_;
+    double time_ = 0;
+    long step_ = 0;
+    std::int64_t next_id_ = 0;
+    bool list_valid_ = false;
+};
+
+} // namespace kiln::dynamics

@@ -1,0 +1,643 @@
+#include "io/case_reader.hpp"
+
+#include "core/error.hpp"
+
+#include <cmath>
+#include <fmt/format.h>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <toml++/toml.h>
+
+namespace kiln::io {
+
+namespace {
+
+constexpr double inf = std::numeric_limits<double>::infinity();
+
+/// Allowed interval of a number; prints itself as "lo < value <= hi" and the like.
+struct Range {
+    double lo = -inf;
+    double hi = inf;
+    bool lo_closed = false;
+    bool hi_closed = false;
+
+    [[nodiscard]] bool contains(double v) const {
+        const bool above = lo_closed ? v >= lo : v > lo;
+        const bool below = hi_closed ? v <= hi : v < hi;
+        return std::isfinite(v) && above && below;
+    }
+    [[nodiscard]] std::string describe() const {
+        const std::string l = lo_closed ? " <= " : " < ";
+        const std::string h = hi_closed ? " <= " : " < ";
+        if (std::isinf(lo) && std::isinf(hi)) {
+            return "any finite number";
+        }
+        if (std::isinf(hi)) {
+            return fmt::format("value{}{:g}", lo_closed ? " >= " : " > ", lo);
+        }
+        if (std::isinf(lo)) {
+            return fmt::format("value{}{:g}", hi_closed ? " <= " : " < ", hi);
+        }
+        return fmt::format("{:g}{}value{}{:g}", lo, l, h, hi);
+    }
+};
+
+Range positive() { return {0.0, inf, false, false}; }
+Range non_negative() { return {0.0, inf, true, false}; }
+
+/// One TOML table of the case, read with bookkeeping: every key read is recorded (unknown keys are
+/// errors in finish()) and copied, with defaults filled in, to the resolved table.
+class Section {
+  public:
+    Section(std::string file, const toml::table& t, std::string path, toml::table& out)
+        : file_(std::move(file)), t_(t), path_(std::move(path)), out_(out) {}
+
+    [[noreturn]] void fail(std::string_view key, long line, const std::string& what) const {
+        throw InputError(file_, line, full(key), what);
+    }
+    [[noreturn]] void fail_at(std::string_view key, const std::string& what) const {
+        fail(key, line_of(key), what);
+    }
+
+    [[nodiscard]] bool has(std::string_view key) const { return t_.contains(key); }
+
+    /// A real number; `def` empty means required.
+    double real(std::string_view key, std::optional<double> def, Range r, std::string_view unit) {
+        const toml::node* n = take(key);
+        double v = 0.0;
+        if (n == nullptr) {
+            if (!def) {
+                fail(key, table_line(), fmt::format("missing required value ({}, {})", unit, r.describe()));
+            }
+            v = *def;
+        } else {
+            v = as_real(key, *n, unit);
+        }
+        if (!r.contains(v)) {
+            fail_at(key, fmt::format("{:g} {} is out of range; allowed: {}", v, unit, r.describe()));
+        }
+        out_.insert_or_assign(key, v);
+        return v;
+    }
+
+    /// An integer; `def` empty means required.
+    long integer(std::string_view key, std::optional<long> def, long lo, long hi) {
+        const toml::node* n = take(key);
+        long v = 0;
+        if (n == nullptr) {
+            if (!def) {
+                fail(key, table_line(), fmt::format("missing required integer ({} to {})", lo, hi));
+            }
+            v = *def;
+        } else {
+            if (!n->is_integer()) {
+                fail_at(key, fmt::format("expected an integer, got {}", type_name(*n)));
+            }
+            v = static_cast<long>(n->as_integer()->get());
+        }
+        if (v < lo || v > hi) {
+            fail_at(key, fmt::format("{} is out of range; allowed: {} to {}", v, lo, hi));
+        }
+        out_.insert_or_assign(key, static_cast<std::int64_t>(v));
+        return v;
+    }
+
+    bool boolean(std::string_view key, bool def) {
+        const toml::node* n = take(key);
+        bool v = def;
+        if (n != nullptr) {
+            if (!n->is_boolean()) {
+                fail_at(key, fmt::format("expected true or false, got {}", type_name(*n)));
+            }
+            v = n->as_boolean()->get();
+        }
+        out_.insert_or_assign(key, v);
+        return v;
+    }
+
+    /// A string; `allowed` empty means any non-empty string.
+    std::string text(std::string_view key, std::optional<std::string> def,
+                     const std::vector<std::string>& allowed = {}) {
+        const toml::node* n = take(key);
+        std::string v;
+        if (n == nullptr) {
+            if (!def) {
+                fail(key, table_line(), "missing required string" + choices(allowed));
+            }
+            v = *def;
+        } else {
+            if (!n->is_string()) {
+                fail_at(key, fmt::format("expected a string, got {}", type_name(*n)) + choices(allowed));
+            }
+            v = n->as_string()->get();
+        }
+        if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), v) == allowed.end()) {
+            fail_at(key, fmt::format("\"{}\" is not allowed", v) + choices(allowed));
+        }
+        if (allowed.empty() && v.empty()) {
+            fail_at(key, "must not be empty");
+        }
+        out_.insert_or_assign(key, v);
+        return v;
+    }
+
+    /// A vector of three real numbers.
+    Vec3 vec3(std::string_view key, std::optional<Vec3> def, std::string_view unit,
+              bool nonzero = false) {
+        const toml::node* n = take(key);
+        Vec3 v = Vec3::Zero();
+        if (n == nullptr) {
+            if (!def) {
+                fail(key, table_line(), fmt::format("missing required array of 3 numbers ({})", unit));
+            }
+            v = *def;
+        } else {
+            const toml::array* a = n->as_array();
+            if (a == nullptr || a->size() != 3) {
+                fail_at(key, fmt::format("expected an array of 3 numbers ({})", unit));
+            }
+            for (std::size_t k = 0; k < 3; ++k) {
+                v[static_cast<Eigen::Index>(k)] = as_real(key, *a->get(k), unit);
+            }
+        }
+        if (nonzero && v.norm() == 0.0) {
+            fail_at(key, "must not be the zero vector");
+        }
+        out_.insert_or_assign(key, toml::array{v[0], v[1], v[2]});
+        return v;
+    }
+
+    /// A list of strings.
+    std::vector<std::string> strings(std::string_view key, std::optional<std::vector<std::string>> def,
+                                     const std::vector<std::string>& allowed = {}) {
+        const toml::node* n = take(key);
+        std::vector<std::string> v;
+        if (n == nullptr) {
+            if (!def) {
+                fail(key, table_line(), "missing required array of strings");
+            }
+            v = *def;
+        } else {
+            const toml::array* a = n->as_array();
+            if (a == nullptr) {
+                fail_at(key, "expected an array of strings" + choices(allowed));
+            }
+            for (const toml::node& e : *a) {
+                if (!e.is_string()) {
+                    fail_at(key, "expected an array of strings" + choices(allowed));
+                }
+                v.push_back(e.as_string()->get());
+            }
+        }
+        toml::array arr;
+        for (const auto& s : v) {
+            if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), s) == allowed.end()) {
+                fail_at(key, fmt::format("\"{}\" is not allowed", s) + choices(allowed));
+            }
+            arr.push_back(s);
+        }
+        out_.insert_or_assign(key, arr);
+        return v;
+    }
+
+    /// A list of non-negative real numbers.
+    std::vector<double> reals(std::string_view key, std::string_view unit, Range r) {
+        const toml::node* n = take(key);
+        if (n == nullptr || !n->is_array() || n->as_array()->empty()) {
+            fail(key, n ? line_of(key) : table_line(),
+                 fmt::format("expected a non-empty array of numbers ({})", unit));
+        }
+        std::vector<double> v;
+        toml::array arr;
+        for (const toml::node& e : *n->as_array()) {
+            const double x = as_real(key, e, unit);
+            if (!r.contains(x)) {
+                fail_at(key, fmt::format("{:g} {} is out of range; allowed: {}", x, unit, r.describe()));
+            }
+            v.push_back(x);
+            arr.push_back(x);
+        }
+        out_.insert_or_assign(key, arr);
+        return v;
+    }
+
+    /// A sub-table (inline or not); nullptr when absent.
+    const toml::table* table(std::string_view key) {
+        const toml::node* n = take(key);
+        if (n == nullptr) {
+            return nullptr;
+        }
+        if (!n->is_table()) {
+            fail_at(key, fmt::format("expected a table, got {}", type_name(*n)));
+        }
+        return n->as_table();
+    }
+
+    /// Marks a key as read without reading it (handled by the caller).
+    const toml::node* take(std::string_view key) {
+        used_.insert(std::string(key));
+        return t_.get(key);
+    }
+
+    /// Unknown keys are errors.
+    void finish(const std::vector<std::string>& hint = {}) const {
+        for (auto&& [k, v] : t_) {
+            if (used_.count(std::string(k.str())) == 0) {
+                std::string known;
+                for (const auto& u : used_) {
+                    known += (known.empty() ? "" : ", ") + u;
+                }
+                for (const auto& u : hint) {
+                    known += (known.empty() ? "" : ", ") + u;
+                }
+                fail(k.str(), static_cast<long>(k.source().begin.line),
+                     "unknown key; allowed here: " + known);
+            }
+        }
+    }
+
+    [[nodiscard]] long table_line() const { return static_cast<long>(t_.source().begin.line); }
+    [[nodiscard]] long line_of(std::string_view key) const {
+        const toml::node* n = t_.get(key);
+        return n ? static_cast<long>(n->source().begin.line) : table_line();
+    }
+    [[nodiscard]] std::string full(std::string_view key) const {
+        return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
+    }
+    [[nodiscard]] const std::string& file() const { return file_; }
+    [[nodiscard]] toml::table& out() { return out_; }
+
+  private:
+    double as_real(std::string_view key, const toml::node& n, std::string_view unit) const {
+        if (n.is_integer()) {
+            return static_cast<double>(n.as_integer()->get());
+        }
+        if (n.is_floating_point()) {
+            return n.as_floating_point()->get();
+        }
+        fail(key, static_cast<long>(n.source().begin.line),
+             fmt::format("expected a number ({}), got {}", unit, type_name(n)));
+    }
+    static std::string type_name(const toml::node& n) {
+        std::ostringstream os;
+        os << n.type();
+        return os.str();
+    }
+    static std::string choices(const std::vector<std::string>& allowed) {
+        if (allowed.empty()) {
+            return "";
+        }
+        std::string s = "; allowed: ";
+        for (std::size_t k = 0; k < allowed.size(); ++k) {
+            s += (k ? ", \"" : "\"") + allowed[k] + "\"";
+        }
+        return s;
+    }
+
+    std::string file_;
+    const toml::table& t_;
+    std::string path_;
+    toml::table& out_;
+    std::set<std::string> used_;
+};
+
+/// Iterates an array of tables ([[name]]); each element gets its own Section.
+template <class F>
+void for_each_table(Section& root, std::string_view key, F&& f) {
+    const toml::node* n = root.take(key);
+    if (n == nullptr) {
+        return;
+    }
+    const toml::array* a = n->as_array();
+    if (a == nullptr || !a->is_array_of_tables()) {
+        root.fail_at(key, fmt::format("expected one or more [[{}]] tables", key));
+    }
+    toml::array out_arr;
+    for (std::size_t k = 0; k < a->size(); ++k) {
+        toml::table out_t;
+        Section s(root.file(), *a->get(k)->as_table(), fmt::format("{}[{}]", key, k), out_t);
+        f(s, k);
+        out_arr.push_back(std::move(out_t));
+    }
+    root.out().insert_or_assign(key, std::move(out_arr));
+}
+
+int material_index(Section& s, std::string_view key, const std::map<std::string, int>& mats) {
+    std::vector<std::string> names;
+    for (const auto& [name, idx] : mats) {
+        names.push_back(name);
+    }
+    const std::string m = s.text(key, std::nullopt, names);
+    return mats.at(m);
+}
+
+dynamics::SizeDistribution read_radius(Section& s) {
+    dynamics::SizeDistribution d;
+    const toml::node* n = s.take("radius");
+    if (n == nullptr) {
+        s.fail("radius", s.table_line(), "missing required value (m): a number or a distribution table");
+    }
+    if (!n->is_table()) {
+        d.kind = dynamics::SizeDistribution::Kind::constant;
+        d.radius = s.real("radius", std::nullopt, positive(), "m");
+        return d;
+    }
+    toml::table out_t;
+    Section r(s.file(), *n->as_table(), s.full("radius"), out_t);
+    const std::string kind = r.text("distribution", std::nullopt, {"uniform", "normal", "discrete"});
+    if (kind == "uniform" || kind == "normal") {
+        d.kind = kind == "uniform" ? dynamics::SizeDistribution::Kind::uniform
+                                   : dynamics::SizeDistribution::Kind::normal;
+        d.min = r.real("min", std::nullopt, positive(), "m");
+        d.max = r.real("max", std::nullopt, Range{d.min, inf, true, false}, "m");
+        if (kind == "normal") {
+            d.mean = r.real("mean", std::nullopt, Range{d.min, d.max, true, true}, "m");
+            d.stddev = r.real("stddev", std::nullopt, positive(), "m");
+        }
+    } else {
+        d.kind = dynamics::SizeDistribution::Kind::discrete;
+        d.values = r.reals("values", "m", positive());
+        if (r.has("weights")) {
+            d.weights = r.reals("weights", "-", positive());
+        } else {
+            d.weights.assign(d.values.size(), 1.0);
+            r.take("weights");
+            toml::array w;
+            for (double x : d.weights) {
+                w.push_back(x);
+            }
+            out_t.insert_or_assign("weights", w);
+        }
+        if (d.weights.size() != d.values.size()) {
+            r.fail_at("weights", fmt::format("has {} entries but values has {}; they must match",
+                                             d.weights.size(), d.values.size()));
+        }
+    }
+    r.finish();
+    s.out().insert_or_assign("radius", std::move(out_t));
+    return d;
+}
+
+Aabb read_region(Section& s) {
+    const toml::table* t = s.table("region");
+    if (t == nullptr) {
+        s.fail("region", s.table_line(), "missing required table { min = [x, y, z], max = [x, y, z] } (m)");
+    }
+    toml::table out_t;
+    Section r(s.file(), *t, s.full("region"), out_t);
+    Aabb box;
+    box.lo = r.vec3("min", std::nullopt, "m");
+    box.hi = r.vec3("max", std::nullopt, "m");
+    if (!((box.hi - box.lo).array() > 0.0).all()) {
+        r.fail_at("max", "must exceed min in every coordinate");
+    }
+    r.finish();
+    s.out().insert_or_assign("region", std::move(out_t));
+    return box;
+}
+
+void read_walls(Section& root, CaseSpec& c, const std::map<std::string, int>& mats) {
+    for_each_table(root, "wall", [&](Section& s, std::size_t k) {
+        const std::string type = s.text("type", std::nullopt, {"plane", "box", "cylinder"});
+        const int mat = material_index(s, "material", mats);
+        const std::string name = s.text("name", fmt::format("{}{}", type, k));
+        if (type == "plane") {
+            dynamics::PlaneWall w;
+            w.point = s.vec3("point", std::nullopt, "m");
+            w.normal = s.vec3("normal", std::nullopt, "-", true).normalized();
+            c.scene.walls.push_back({name, w, mat});
+        } else if (type == "box") {
+            const Vec3 lo = s.vec3("min", std::nullopt, "m");
+            const Vec3 hi = s.vec3("max", std::nullopt, "m");
+            if (!((hi - lo).array() > 0.0).all()) {
+                s.fail_at("max", "must exceed min in every coordinate");
+            }
+            const char* axes = "xyz";
+            for (int a = 0; a < 3; ++a) {
+                const Vec3 e = Vec3::Unit(a);
+                c.scene.walls.push_back({fmt::format("{}.{}min", name, axes[a]), dynamics::PlaneWall{lo, e}, mat});
+                c.scene.walls.push_back({fmt::format("{}.{}max", name, axes[a]), dynamics::PlaneWall{hi, -e}, mat});
+            }
+        } else {
+            dynamics::CylinderWall w;
+            w.axis_point = s.vec3("point", std::nullopt, "m");
+            w.axis = s.vec3("axis", std::nullopt, "-", true).normalized();
+            w.radius = s.real("radius", std::nullopt, positive(), "m");
+            c.scene.walls.push_back({name, w, mat});
+        }
+        s.finish({"point", "normal", "min", "max", "axis", "radius"});
+    });
+}
+
+void read_inserts(Section& root, CaseSpec& c, const std::map<std::string, int>& mats) {
+    for_each_table(root, "insert", [&](Section& s, std::size_t) {
+        dynamics::InsertSpec ins;
+        const std::string type = s.text("type", std::nullopt, {"random", "lattice"});
+        ins.kind = type == "random" ? dynamics::InsertSpec::Kind::random : dynamics::InsertSpec::Kind::lattice;
+        ins.material = material_index(s, "material", mats);
+        ins.region = read_region(s);
+        ins.size = read_radius(s);
+        if (ins.kind == dynamics::InsertSpec::Kind::random) {
+            ins.count = s.integer("count", std::nullopt, 1, 100'000'000);
+        } else {
+            ins.count = s.integer("count", 0, 0, 100'000'000);
+            ins.spacing = s.real("spacing", 0.0, non_negative(), "m");
+            if (ins.spacing > 0.0 && ins.spacing < 2.0 * ins.size.largest()) {
+                s.fail_at("spacing", fmt::format("{:g} m would overlap particles of radius {:g} m; "
+                                                 "allowed: 0 (automatic) or >= {:g}",
+                                                 ins.spacing, ins.size.largest(), 2.0 * ins.size.largest()));
+            }
+        }
+        ins.velocity = s.vec3("velocity", Vec3::Zero(), "m/s");
+        ins.omega = s.vec3("angular_velocity", Vec3::Zero(), "rad/s");
+        s.finish({"spacing", "count"});
+        c.scene.inserts.push_back(ins);
+    });
+}
+
+} // namespace
+
+CaseSpec read_case_text(const std::string& text, const std::string& name) {
+    toml::table doc;
+    try {
+        doc = toml::parse(text, name);
+    } catch (const toml::parse_error& e) {
+        throw InputError(name, static_cast<long>(e.source().begin.line), "",
+                         std::string("TOML syntax error: ") + std::string(e.description()));
+    }
+    CaseSpec c;
+    c.source_file = name;
+    toml::table resolved;
+    Section root(name, doc, "", resolved);
+
+    // [simulation]
+    {
+        const toml::table* t = root.table("simulation");
+        if (t == nullptr) {
+            root.fail("simulation", 0, "missing required table [simulation] (time_step, end_time)");
+        }
+        toml::table out_t;
+        Section s(name, *t, "simulation", out_t);
+        std::string stem = name.substr(name.find_last_of('/') + 1);
+        if (stem == "case.toml" && name.find('/') != std::string::npos) {
+            const std::string dir = name.substr(0, name.find_last_of('/'));
+            stem = dir.substr(dir.find_last_of('/') + 1);
+        } else {
+            stem = stem.substr(0, stem.find('.'));
+        }
+        c.run.name = s.text("name", stem);
+        c.scene.time_step = s.real("time_step", std::nullopt, positive(), "s");
+        c.run.end_time = s.real("end_time", std::nullopt, positive(), "s");
+        c.scene.gravity = s.vec3("gravity", Vec3(0, 0, -9.81), "m/s^2");
+        c.scene.seed = static_cast<std::uint64_t>(s.integer("seed", 1, 0, std::numeric_limits<long>::max()));
+        c.scene.time_step_fraction = s.real("time_step_fraction", 0.1, Range{0, 1, false, true}, "-");
+        c.scene.allow_unsafe_time_step = s.boolean("allow_unsafe_time_step", false);
+        c.scene.expected_speed = s.real("expected_impact_speed", 0.0, non_negative(), "m/s");
+        if (c.run.end_time < c.scene.time_step) {
+            s.fail_at("end_time", fmt::format("{:g} s is shorter than one time step ({:g} s)",
+                                              c.run.end_time, c.scene.time_step));
+        }
+        s.finish();
+        resolved.insert_or_assign("simulation", std::move(out_t));
+    }
+
+    // [[material]]
+    std::map<std::string, int> mats;
+    for_each_table(root, "material", [&](Section& s, std::size_t) {
+        Material m;
+        m.name = s.text("name", std::nullopt);
+        if (mats.count(m.name) != 0) {
+            s.fail_at("name", fmt::format("material \"{}\" is defined twice; names must be unique", m.name));
+        }
+        m.youngs_modulus = s.real("youngs_modulus", std::nullopt, positive(), "Pa");
+        m.poisson_ratio = s.real("poisson_ratio", std::nullopt, Range{-1.0, 0.5, false, false}, "-");
+        m.density = s.real("density", std::nullopt, positive(), "kg/m^3");
+        m.restitution = s.real("restitution", std::nullopt, Range{0.0, 1.0, false, true}, "-");
+        m.friction = s.real("friction", 0.0, non_negative(), "-");
+        m.rolling_friction = s.real("rolling_friction", 0.0, non_negative(), "-");
+        s.finish();
+        mats[m.name] = static_cast<int>(c.scene.materials.size());
+        c.scene.materials.push_back(m);
+    });
+    if (mats.empty()) {
+        root.fail("material", 0, "at least one [[material]] table is required");
+    }
+
+    // [contact]
+    {
+        const toml::table* t = root.table("contact");
+        const toml::table empty;
+        toml::table out_t;
+        Section s(name, t ? *t : empty, "contact", out_t);
+        const std::string model = s.text("model", "hertz_mindlin", {"hertz_mindlin", "linear"});
+        if (model == "linear") {
+            contact::LinearSpringDashpot lin;
+            lin.stiffness = s.real("stiffness", std::nullopt, positive(), "N/m");
+            lin.tangential_ratio = s.real("tangential_stiffness_ratio", 2.0 / 7.0, Range{0, 10, false, true}, "-");
+            c.scene.contact.law = lin;
+        } else if (s.has("stiffness") || s.has("tangential_stiffness_ratio")) {
+            s.fail_at(s.has("stiffness") ? "stiffness" : "tangential_stiffness_ratio",
+                      "only used by model = \"linear\"; Hertz-Mindlin takes its stiffness from the materials");
+        }
+        const std::string rolling = s.text("rolling", "none", {"none", "constant_torque"});
+        c.scene.contact.rolling = rolling == "none" ? contact::RollingModel::none
+                                                    : contact::RollingModel::constant_torque;
+        c.scene.contact.clamp_normal_force = s.boolean("clamp_normal_force", true);
+        c.scene.skin = s.real("skin", 0.0, non_negative(), "m");
+        c.scene.sort_particles = s.boolean("sort_particles", true);
+        s.finish({"stiffness", "tangential_stiffness_ratio"});
+        resolved.insert_or_assign("contact", std::move(out_t));
+    }
+
+    // [[pair]]
+    for_each_table(root, "pair", [&](Section& s, std::size_t) {
+        const toml::node* n = s.take("materials");
+        const toml::array* a = n ? n->as_array() : nullptr;
+        if (a == nullptr || a->size() != 2 || !a->get(0)->is_string() || !a->get(1)->is_string()) {
+            s.fail("materials", n ? s.line_of("materials") : s.table_line(),
+                   "expected an array of two material names");
+        }
+        PairOverride o;
+        const std::string na = a->get(0)->as_string()->get();
+        const std::string nb = a->get(1)->as_string()->get();
+        for (const auto& nm : {na, nb}) {
+            if (mats.count(nm) == 0) {
+                s.fail_at("materials", fmt::format("unknown material \"{}\"", nm));
+            }
+        }
+        o.a = mats.at(na);
+        o.b = mats.at(nb);
+        s.out().insert_or_assign("materials", toml::array{na, nb});
+        if (s.has("restitution")) {
+            o.restitution = s.real("restitution", std::nullopt, Range{0.0, 1.0, false, true}, "-");
+        }
+        if (s.has("friction")) {
+            o.friction = s.real("friction", std::nullopt, non_negative(), "-");
+        }
+        if (s.has("rolling_friction")) {
+            o.rolling_friction = s.real("rolling_friction", std::nullopt, non_negative(), "-");
+        }
+        s.finish({"restitution", "friction", "rolling_friction"});
+        c.scene.pairs.push_back(o);
+    });
+
+    read_walls(root, c, mats);
+
+    // [[particle]]
+    for_each_table(root, "particle", [&](Section& s, std::size_t) {
+        dynamics::ParticleSpec p;
+        p.material = material_index(s, "material", mats);
+        p.radius = s.real("radius", std::nullopt, positive(), "m");
+        p.x = s.vec3("position", std::nullopt, "m");
+        p.v = s.vec3("velocity", Vec3::Zero(), "m/s");
+        p.omega = s.vec3("angular_velocity", Vec3::Zero(), "rad/s");
+        s.finish();
+        c.scene.particles.push_back(p);
+    });
+
+    read_inserts(root, c, mats);
+    if (c.scene.particles.empty() && c.scene.inserts.empty()) {
+        root.fail("insert", 0, "the case has no particles; add [[particle]] or [[insert]] tables");
+    }
+
+    // [output]
+    {
+        const toml::table* t = root.table("output");
+        const toml::table empty;
+        toml::table out_t;
+        Section s(name, t ? *t : empty, "output", out_t);
+        const double T = c.run.end_time;
+        c.output.vtk_interval = s.real("vtk_interval", T / 50.0, non_negative(), "s");
+        c.output.monitor_interval = s.real("monitor_interval", T / 200.0, positive(), "s");
+        c.output.monitors = s.strings("monitors",
+                                      std::vector<std::string>{"time", "kinetic_energy", "rotational_energy",
+                                                               "contacts", "coordination", "max_overlap_ratio"},
+                                      monitor_names());
+        c.output.checkpoint_interval = s.real("checkpoint_interval", 0.0, non_negative(), "s");
+        c.output.progress = s.boolean("progress", true);
+        s.finish();
+        resolved.insert_or_assign("output", std::move(out_t));
+    }
+
+    root.finish();
+    std::ostringstream os;
+    os << resolved << "\n";
+    c.resolved_toml = os.str();
+    return c;
+}
+
+CaseSpec read_case_file(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) {
+        throw InputError(path, 0, "", "cannot open the case file");
+    }
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return read_case_text(ss.str(), path);
+}
+
+} // namespace kiln::io

@@ -1,0 +1,41 @@
+#pragma once
+// A whole case: the mechanical scene plus run control and output settings.
+
+#include "dynamics/scene_spec.hpp"
+
+#include <string>
+#include <vector>
+
+namespace kiln::io {
+
+/// Which quantities the CSV monitor file records, one column each, in this order.
+/// Allowed names: time, step, kinetic_energy, rotational_energy, potential_energy, elastic_energy,
+/// total_energy, contacts, wall_contacts, coordination, max_overlap_ratio, max_velocity,
+/// mean_height, max_height, neighbour_builds.
+struct OutputSpec {
+    double vtk_interval = 0;          ///< simulated time between VTK particle files (s), 0 = none
+    double monitor_interval = 0;      ///< simulated time between monitor rows (s)
+    std::vector<std::string> monitors; ///< monitor columns
+    double checkpoint_interval = 0;   ///< simulated time between checkpoints (s), 0 = none
+    bool progress = true;             ///< progress line on stderr (only when it is a terminal)
+};
+
+/// Run control.
+struct RunSpec {
+    double end_time = 0;   ///< simulated end time (s)
+    std::string name;      ///< case name, for output and messages
+};
+
+/// The complete, validated case.
+struct CaseSpec {
+    dynamics::SceneSpec scene;
+    OutputSpec output;
+    RunSpec run;
+    std::string source_file;   ///< path of the case file
+    std::string resolved_toml; ///< the case with every default filled in, as TOML text
+};
+
+/// Names accepted in OutputSpec::monitors.
+const std::vector<std::string>& monitor_names();
+
+} // namespace kiln::io

@@ -1,0 +1,153 @@
+#include "io/checkpoint.hpp"
+
+#include "core/error.hpp"
+
+#include <cstring>
+#include <fmt/format.h>
+#include <fstream>
+#include <type_traits>
+
+namespace kiln::io {
+
+namespace {
+
+constexpr char magic[8] = {'K', 'I', 'L', 'N', 'C', 'K', 'P', '1'};
+
+class Out {
+  public:
+    explicit Out(std::ofstream& f) : f_(f) {}
+    template <class T>
+    void pod(const T& v) {
+        static_assert(std::is_trivially_copyable_v<T>);
+        f_.write(reinterpret_cast<const char*>(&v), sizeof(T));
+    }
+    template <class T>
+    void vec(const std::vector<T>& v) {
+        pod(static_cast<std::uint64_t>(v.size()));
+        if constexpr (std::is_same_v<T, Vec3>) {
+            for (const Vec3& x : v) {
+                f_.write(reinterpret_cast<const char*>(x.data()), 3 * sizeof(double));
+            }
+        } else {
+            static_assert(std::is_trivially_copyable_v<T>);
+            f_.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(T)));
+        }
+    }
+    void str(const std::string& s) {
+        pod(static_cast<std::uint64_t>(s.size()));
+        f_.write(s.data(), static_cast<std::streamsize>(s.size()));
+    }
+
+  private:
+    std::ofstream& f_;
+};
+
+class In {
+  public:
+    In(std::ifstream& f, std::string name) : f_(f), name_(std::move(name)) {}
+    template <class T>
+    void pod(T& v) {
+        f_.read(reinterpret_cast<char*>(&v), sizeof(T));
+        check();
+    }
+    template <class T>
+    void vec(std::vector<T>& v) {
+        std::uint64_t n = 0;
+        pod(n);
+        if (n > (std::uint64_t{1} << 40)) {
+            throw InputError(name_, 0, "", "damaged checkpoint (absurd array length)");
+        }
+        v.resize(n);
+        if constexpr (std::is_same_v<T, Vec3>) {
+            for (Vec3& x : v) {
+                f_.read(reinterpret_cast<char*>(x.data()), 3 * sizeof(double));
+            }
+        } else {
+            f_.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(n * sizeof(T)));
+        }
+        check();
+    }
+    void str(std::string& s) {
+        std::uint64_t n = 0;
+        pod(n);
+        if (n > (std::uint64_t{1} << 30)) {
+            throw InputError(name_, 0, "", "damaged checkpoint (absurd string length)");
+        }
+        s.resize(n);
+        f_.read(s.data(), static_cast<std::streamsize>(n));
+        check();
+    }
+
+  private:
+    void check() const {
+        if (!f_) {
+            throw InputError(name_, 0, "", "truncated or unreadable checkpoint");
+        }
+    }
+    std::ifstream& f_;
+    std::string name_;
+};
+
+template <class IO, class State, class Store>
+void fields(IO& io, State& s, Store& p) {
+    io.vec(p.id);
+    io.vec(p.material);
+    io.vec(p.radius);
+    io.vec(p.mass);
+    io.vec(p.inv_mass);
+    io.vec(p.inv_inertia);
+    io.vec(p.x);
+    io.vec(p.v);
+    io.vec(p.omega);
+    io.vec(p.force);
+    io.vec(p.torque);
+    io.vec(s.nl_offsets);
+    io.vec(s.nl_partners);
+    io.vec(s.nl_shear);
+    io.vec(s.nl_x_build);
+    io.vec(s.nl_ids);
+    io.pod(s.nl_builds);
+    io.vec(s.wall_shear);
+    io.pod(s.time);
+    io.pod(s.step);
+    io.pod(s.next_id);
+    io.pod(s.counters);
+    io.str(s.rng);
+}
+
+} // namespace
+
+void write_checkpoint(const std::filesystem::path& file, const dynamics::SystemState& s) {
+    const std::filesystem::path tmp = file.string() + ".tmp";
+    {
+        std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+        if (!f) {
+            throw InputError(tmp.string(), 0, "", "cannot write the checkpoint file");
+        }
+        f.write(magic, sizeof magic);
+        Out out(f);
+        fields(out, s, s.particles);
+        if (!f) {
+            throw InputError(tmp.string(), 0, "", "writing the checkpoint failed (disk full?)");
+        }
+    }
+    std::filesystem::rename(tmp, file);
+}
+
+dynamics::SystemState read_checkpoint(const std::filesystem::path& file) {
+    std::ifstream f(file, std::ios::binary);
+    if (!f) {
+        throw InputError(file.string(), 0, "", "cannot open the checkpoint file");
+    }
+    char m[sizeof magic] = {};
+    f.read(m, sizeof m);
+    if (!f || std::memcmp(m, magic, sizeof magic) != 0) {
+        throw InputError(file.string(), 0, "", "not a kiln checkpoint (wrong magic bytes)");
+    }
+    dynamics::SystemState s;
+    In in(f, file.string());
+    fields(in, s, s.particles);
+    return s;
+}
+
+} // namespace kiln::io
