@@ -46,6 +46,11 @@ struct Range {
     }
 };
 
+/// "2500 kg/m^3", or just "0.5" for dimensionless values.
+std::string with_unit(double v, std::string_view unit) {
+    return unit == "-" ? fmt::format("{:g}", v) : fmt::format("{:g} {}", v, unit);
+}
+
 Range positive() { return {0.0, inf, false, false}; }
 Range non_negative() { return {0.0, inf, true, false}; }
 
@@ -78,7 +83,7 @@ class Section {
             v = as_real(key, *n, unit);
         }
         if (!r.contains(v)) {
-            fail_at(key, fmt::format("{:g} {} is out of range; allowed: {}", v, unit, r.describe()));
+            fail_at(key, fmt::format("{} is out of range; allowed: {}", with_unit(v, unit), r.describe()));
         }
         out_.insert_or_assign(key, v);
         return v;
@@ -216,7 +221,7 @@ class Section {
         for (const toml::node& e : *n->as_array()) {
             const double x = as_real(key, e, unit);
             if (!r.contains(x)) {
-                fail_at(key, fmt::format("{:g} {} is out of range; allowed: {}", x, unit, r.describe()));
+                fail_at(key, fmt::format("{} is out of range; allowed: {}", with_unit(x, unit), r.describe()));
             }
             v.push_back(x);
             arr.push_back(x);

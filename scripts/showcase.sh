@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Installs what is missing, builds kiln and runs the showcase case (cases/pour).
+set -euo pipefail
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+"$here/scripts/setup.sh" "$here/build"
+cd "$here"
+./build/src/app/kiln run cases/pour/case.toml --out out/pour

@@ -1,0 +1,127 @@
+#include "core/error.hpp"
+#include "dynamics/system.hpp"
+
+#include <gtest/gtest.h>
+
+namespace kiln::dynamics {
+namespace {
+
+SceneSpec base_scene() {
+    SceneSpec s;
+    s.materials.push_back({"m", 1e7, 0.3, 2500, 0.5, 0.3, 0.0});
+    s.time_step = 1e-5;
+    return s;
+}
+
+TEST(System, FreeFallIsExactForConstantGravity) {
+    SceneSpec s = base_scene();
+    s.particles.push_back({0, 1e-3, Vec3(0, 0, 1), Vec3(0.1, 0, 2), Vec3::Zero()});
+    System sys(s);
+    for (int k = 0; k < 1000; ++k) {
+        sys.step();
+    }
+    const double t = sys.time();
+    const Vec3 expected = Vec3(0, 0, 1) + Vec3(0.1, 0, 2) * t + 0.5 * s.gravity * t * t;
+    constexpr double rounding = 1e-12; // velocity Verlet integrates constant acceleration exactly
+    EXPECT_NEAR((sys.particles().x[0] - expected).norm(), 0.0, rounding);
+}
+
+TEST(System, CollisionConservesMomentum) {
+    SceneSpec s = base_scene();
+    s.gravity.setZero();
+    s.particles.push_back({0, 1e-3, Vec3(0, 0, 0), Vec3(1, 0.2, 0), Vec3(0, 0, 5)});
+    s.particles.push_back({0, 2e-3, Vec3(3.5e-3, 0.5e-3, 0), Vec3(-1, 0, 0), Vec3::Zero()});
+    s.time_step = 1e-7;
+    System sys(s);
+    const auto momentum = [&] {
+        Vec3 m = Vec3::Zero();
+        for (std::size_t i = 0; i < 2; ++i) {
+            m += sys.particles().mass[i] * sys.particles().v[i];
+        }
+        return m;
+    };
+    const Vec3 m0 = momentum();
+    long contacts = 0;
+    for (int k = 0; k < 20000; ++k) {
+        sys.step();
+        contacts += sys.counters().particle_contacts;
+    }
+    EXPECT_GT(contacts, 0);
+    constexpr double rounding = 1e-12; // pair forces are applied as exact opposites
+    EXPECT_NEAR((momentum() - m0).norm() / m0.norm(), 0.0, rounding);
+}
+
+TEST(System, TooLargeTimeStepIsAnInputError) {
+    SceneSpec s = base_scene();
+    s.particles.push_back({0, 1e-3, Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
+    s.time_step = 1e-3;
+    EXPECT_THROW(System{s}, InputError);
+    s.allow_unsafe_time_step = true;
+    System sys(s);
+    EXPECT_FALSE(sys.warnings().empty());
+}
+
+TEST(System, RandomInsertionPlacesNonOverlappingParticlesInRegion) {
+    SceneSpec s = base_scene();
+    InsertSpec ins;
+    ins.region = {Vec3(0, 0, 0), Vec3(0.02, 0.02, 0.04)};
+    ins.count = 300;
+    ins.size.kind = SizeDistribution::Kind::uniform;
+    ins.size.min = 0.5e-3;
+    ins.size.max = 1.0e-3;
+    s.inserts.push_back(ins);
+    const System sys(s);
+    const ParticleStore& p = sys.particles();
+    ASSERT_EQ(p.size(), 300U);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        EXPECT_GE(p.radius[i], 0.5e-3);
+        EXPECT_LE(p.radius[i], 1.0e-3);
+        EXPECT_TRUE((p.x[i].array() - p.radius[i] >= ins.region.lo.array()).all());
+        EXPECT_TRUE((p.x[i].array() + p.radius[i] <= ins.region.hi.array()).all());
+        for (std::size_t j = i + 1; j < p.size(); ++j) {
+            EXPECT_GE((p.x[i] - p.x[j]).norm(), p.radius[i] + p.radius[j]);
+        }
+    }
+}
+
+TEST(System, InsertionThatCannotFitIsAnInputError) {
+    SceneSpec s = base_scene();
+    InsertSpec ins;
+    ins.region = {Vec3(0, 0, 0), Vec3(0.01, 0.01, 0.01)};
+    ins.count = 1000; // would need a solid fraction of 4
+    ins.size.radius = 1e-3;
+    s.inserts.push_back(ins);
+    EXPECT_THROW(System{s}, InputError);
+}
+
+TEST(System, LatticeFillsRegion) {
+    SceneSpec s = base_scene();
+    InsertSpec ins;
+    ins.kind = InsertSpec::Kind::lattice;
+    ins.region = {Vec3(0, 0, 0), Vec3(0.01, 0.01, 0.01)};
+    ins.size.radius = 1e-3;
+    s.inserts.push_back(ins);
+    const System sys(s);
+    EXPECT_EQ(sys.particles().size(), 125U); // 5 x 5 x 5 spheres of diameter 2 mm in 10 mm
+}
+
+TEST(System, SpheresComeToRestOnAPlane) {
+    SceneSpec s = base_scene();
+    s.walls.push_back({"floor", PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
+    s.particles.push_back({0, 1e-3, Vec3(0, 0, 3e-3), Vec3::Zero(), Vec3::Zero()});
+    System sys(s);
+    for (int k = 0; k < 50000; ++k) {
+        sys.step();
+    }
+    const double m = sys.particles().mass[0];
+    const double r = sys.particles().radius[0];
+    EXPECT_NEAR(sys.particles().v[0].norm(), 0.0, 1e-6);
+    // Static Hertz overlap against a rigid plane: m g = 4/3 E* sqrt(r) delta^1.5.
+    const double e_star = 1e7 / (1 - 0.09) / 2; // wall of the same material
+    const double delta = std::pow(m * 9.81 / (4.0 / 3.0 * e_star * std::sqrt(r)), 2.0 / 3.0);
+    constexpr double settle = 1e-6; // relative: residual oscillation after 0.5 s of damping
+    EXPECT_NEAR(sys.particles().x[0].z(), r - delta, settle * r);
+}
+
+} // namespace
+} // namespace kiln::dynamics

@@ -1,0 +1,146 @@
+#include "io/case_reader.hpp"
+
+#include "core/error.hpp"
+
+#include <gtest/gtest.h>
+#include <string>
+
+namespace kiln::io {
+namespace {
+
+const std::string good = R"([simulation]
+time_step = 1e-5
+end_time = 0.01
+
+[[material]]
+name = "glass"
+youngs_modulus = 5e6
+poisson_ratio = 0.45
+density = 2500
+restitution = 0.3
+friction = 0.5
+
+[[wall]]
+type = "box"
+material = "glass"
+min = [0, 0, 0]
+max = [0.02, 0.02, 0.04]
+
+[[insert]]
+type = "random"
+material = "glass"
+region = { min = [0, 0, 0.01], max = [0.02, 0.02, 0.04] }
+count = 100
+radius = { distribution = "uniform", min = 0.8e-3, max = 1.2e-3 }
+)";
+
+/// Replaces the first occurrence of `from` in the good case.
+std::string edit(const std::string& from, const std::string& to) {
+    std::string s = good;
+    const auto pos = s.find(from);
+    EXPECT_NE(pos, std::string::npos) << from;
+    return s.replace(pos, from.size(), to);
+}
+
+/// The error message of reading `text`, or "" when it reads fine.
+std::string error_of(const std::string& text) {
+    try {
+        read_case_text(text, "case.toml");
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    return "";
+}
+
+TEST(CaseReader, GoodCaseReadsWithDefaultsFilledIn) {
+    const CaseSpec c = read_case_text(good, "cases/pour/case.toml");
+    EXPECT_EQ(c.run.name, "pour");
+    EXPECT_EQ(c.scene.materials.size(), 1U);
+    EXPECT_EQ(c.scene.walls.size(), 6U); // a box is six planes
+    EXPECT_DOUBLE_EQ(c.scene.materials[0].rolling_friction, 0.0);
+    EXPECT_DOUBLE_EQ(c.scene.gravity.z(), -9.81);
+    EXPECT_NE(c.resolved_toml.find("rolling_friction"), std::string::npos);
+    EXPECT_NE(c.resolved_toml.find("clamp_normal_force"), std::string::npos);
+    // The resolved text is itself a valid case that reads back to the same values.
+    const CaseSpec again = read_case_text(c.resolved_toml, "resolved.toml");
+    EXPECT_EQ(again.resolved_toml, c.resolved_toml);
+}
+
+TEST(CaseReader, UnknownKeyNamesFileLineAndAllowedKeys) {
+    const std::string e = error_of(edit("friction = 0.5", "friction = 0.5\nfriktion = 0.4"));
+    EXPECT_NE(e.find("case.toml:12: material[0].friktion: unknown key"), std::string::npos) << e;
+    EXPECT_NE(e.find("allowed here:"), std::string::npos) << e;
+}
+
+TEST(CaseReader, NegativeDensityIsOutOfRange) {
+    const std::string e = error_of(edit("density = 2500", "density = -2500"));
+    EXPECT_NE(e.find("case.toml:9: material[0].density: -2500 kg/m^3 is out of range; allowed: value > 0"),
+              std::string::npos)
+        << e;
+}
+
+TEST(CaseReader, PoissonRatioOutsideOpenIntervalIsRejected) {
+    const std::string e = error_of(edit("poisson_ratio = 0.45", "poisson_ratio = 0.5"));
+    EXPECT_NE(e.find("material[0].poisson_ratio: 0.5 is out of range; allowed: -1 < value < 0.5"),
+              std::string::npos)
+        << e;
+}
+
+TEST(CaseReader, RestitutionMustBeInZeroOne) {
+    EXPECT_NE(error_of(edit("restitution = 0.3", "restitution = 0")).find("allowed: 0 < value <= 1"),
+              std::string::npos);
+    EXPECT_NE(error_of(edit("restitution = 0.3", "restitution = 1.2")).find("restitution"), std::string::npos);
+    EXPECT_EQ(error_of(edit("restitution = 0.3", "restitution = 1")), "");
+}
+
+TEST(CaseReader, TimeStepMustBePositive) {
+    const std::string e = error_of(edit("time_step = 1e-5", "time_step = 0"));
+    EXPECT_NE(e.find("case.toml:2: simulation.time_step: 0 s is out of range; allowed: value > 0"),
+              std::string::npos)
+        << e;
+}
+
+TEST(CaseReader, MissingRequiredValueIsNamed) {
+    const std::string e = error_of(edit("youngs_modulus = 5e6\n", ""));
+    EXPECT_NE(e.find("material[0].youngs_modulus: missing required value (Pa, value > 0)"), std::string::npos)
+        << e;
+}
+
+TEST(CaseReader, WrongTypeIsNamed) {
+    const std::string e = error_of(edit("count = 100", "count = \"many\""));
+    EXPECT_NE(e.find("insert[0].count: expected an integer, got string"), std::string::npos) << e;
+    const std::string v = error_of(edit("max = [0.02, 0.02, 0.04]", "max = [0.02, 0.02]"));
+    EXPECT_NE(v.find("wall[0].max: expected an array of 3 numbers (m)"), std::string::npos) << v;
+}
+
+TEST(CaseReader, UnknownMaterialAndChoicesAreListed) {
+    const std::string e = error_of(edit("material = \"glass\"\nmin", "material = \"steel\"\nmin"));
+    EXPECT_NE(e.find("wall[0].material: \"steel\" is not allowed; allowed: \"glass\""), std::string::npos) << e;
+    const std::string t = error_of(edit("type = \"box\"", "type = \"sphere\""));
+    EXPECT_NE(t.find("allowed: \"plane\", \"box\", \"cylinder\""), std::string::npos) << t;
+}
+
+TEST(CaseReader, SyntaxErrorGivesLine) {
+    const std::string e = error_of(edit("end_time = 0.01", "end_time = = 0.01"));
+    EXPECT_NE(e.find("case.toml:3: TOML syntax error"), std::string::npos) << e;
+}
+
+TEST(CaseReader, LinearModelNeedsStiffnessAndHertzRefusesIt) {
+    const std::string lin = good + "\n[contact]\nmodel = \"linear\"\n";
+    EXPECT_NE(error_of(lin).find("contact.stiffness: missing required value (N/m"), std::string::npos);
+    const std::string hertz = good + "\n[contact]\nstiffness = 1e5\n";
+    EXPECT_NE(error_of(hertz).find("only used by model = \"linear\""), std::string::npos);
+}
+
+TEST(CaseReader, RegionMaxMustExceedMin) {
+    const std::string e = error_of(edit("max = [0.02, 0.02, 0.04] }", "max = [0.02, 0.02, 0.0] }"));
+    EXPECT_NE(e.find("insert[0].region.max: must exceed min in every coordinate"), std::string::npos) << e;
+}
+
+TEST(CaseReader, UnknownMonitorIsRejected) {
+    const std::string e = error_of(good + "\n[output]\nmonitors = [\"time\", \"temperature\"]\n");
+    EXPECT_NE(e.find("output.monitors: \"temperature\" is not allowed"), std::string::npos) << e;
+}
+
+} // namespace
+} // namespace kiln::io
