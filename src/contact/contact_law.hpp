@@ -113,7 +113,7 @@ inline Stiffness stiffness(const LinearSpringDashpot& law, const PairProperties&
 
 /// Evaluates one contact and updates its tangential history `shear` (m, world, on i relative to j).
 template <class Law>
-inline ContactOutput evaluate(const Law& law, const ContactModel& model, const PairProperties& p,
+[[gnu::always_inline]] inline ContactOutput evaluate(const Law& law, const ContactModel& model, const PairProperties& p,
                               const ContactInput& c, Vec3& shear, double dt) {
     const detail::Stiffness s = detail::stiffness(law, p, c);
     const double vn = c.v_rel.dot(c.n);

@@ -115,8 +115,8 @@ void System::check_time_step() {
 
 void System::rebuild_neighbours() {
     const std::vector<std::uint32_t> order = nl_.build(p_, spec_.sort_particles);
-    if (!order.empty() && !spec_.walls.empty()) {
-        const std::size_t nw = spec_.walls.size();
+    const std::size_t nw = spec_.walls.size();
+    if (!order.empty() && nw > 0) {
         std::vector<Vec3> s(wall_shear_.size());
         for (std::size_t k = 0; k < order.size(); ++k) {
             for (std::size_t w = 0; w < nw; ++w) {
@@ -125,7 +125,26 @@ void System::rebuild_neighbours() {
         }
         wall_shear_.swap(s);
     }
+    find_wall_candidates();
     list_valid_ = true;
+}
+
+void System::find_wall_candidates() {
+    // Particles within the skin of a wall. A particle further away cannot reach the wall before the
+    // next rebuild: it is at most skin/2 from its position at the last build, so at most a skin from
+    // where it is now.
+    const std::size_t nw = spec_.walls.size();
+    wall_candidates_.assign(nw, {});
+    for (std::size_t w = 0; w < nw; ++w) {
+        for (std::size_t i = 0; i < p_.size(); ++i) {
+            const WallContact wc = std::visit(
+                [&](const auto& shape) { return wall_contact(shape, p_.x[i], p_.radius[i]); },
+                spec_.walls[w].shape);
+            if (wc.overlap > -nl_.skin()) {
+                wall_candidates_[w].push_back(static_cast<std::uint32_t>(i));
+            }
+        }
+    }
 }
 
 void System::refresh() {
@@ -184,7 +203,7 @@ void System::wall_forces(const Law& law) {
     const double dt = spec_.time_step;
     for (std::size_t w = 0; w < nw; ++w) {
         const Wall& wall = spec_.walls[w];
-        for (std::size_t i = 0; i < p_.size(); ++i) {
+        for (const std::uint32_t i : wall_candidates_[w]) {
             const double r = p_.radius[i];
             const WallContact wc =
                 std::visit([&](const auto& shape) { return wall_contact(shape, p_.x[i], r); }, wall.shape);
@@ -227,7 +246,7 @@ void System::compute_forces() {
 
 void System::step() {
     if (!list_valid_) {
-        refresh();
+        rebuild_neighbours();
     }
     const double dt = spec_.time_step;
     const double h = 0.5 * dt;
@@ -302,9 +321,11 @@ void System::restore_state(SystemState s) {
     std::istringstream is(s.rng);
     is >> rng_;
     counters_ = s.counters;
+    // The list is restored as it was; rebuilding it now would reorder particles and change the
+    // summation order. Forces and torques of the last step are part of the store; recomputing them
+    // would advance the tangential histories a second time. Either would break exact continuation.
+    find_wall_candidates();
     list_valid_ = true;
-    // Forces and torques of the last step are part of the store; recomputing them here would advance
-    // the tangential histories a second time and break the exact continuation.
 }
 
 } // namespace kiln::dynamics

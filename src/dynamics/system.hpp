@@ -106,12 +106,14 @@ class System {
     template <class Law>
     void wall_forces(const Law& law);
     void rebuild_neighbours();
+    void find_wall_candidates();
 
     SceneSpec spec_;
     PairTable pairs_;
     ParticleStore p_;
     contact::NeighbourList nl_;
     std::vector<Vec3> wall_shear_;  // [particle * n_walls + wall]
+    std::vector<std::vector<std::uint32_t>> wall_candidates_;  // per wall: particles within the skin
     ContactCounters counters_;
     TimeStepReport ts_;
     std::vector<std::string> warnings_;
