@@ -5,3 +5,4 @@ here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 "$here/scripts/setup.sh" "$here/build"
 cd "$here"
 ./build/src/app/kiln run cases/pour/case.toml --out out/pour
+/usr/bin/python3 "$here/scripts/plot_monitors.py" out/pour || echo "(no plot: python3-matplotlib missing)"

@@ -32,6 +32,16 @@ void NeighbourList::restore(std::vector<std::uint32_t> offsets, std::vector<std:
     shear_ = std::move(shear);
     x_build_ = std::move(x_at_build);
     builds_ = builds;
+    fill_owners();
+}
+
+void NeighbourList::fill_owners() {
+    owners_.resize(partners_.size());
+    for (std::size_t i = 0; i + 1 < offsets_.size(); ++i) {
+        for (std::uint32_t k = offsets_[i]; k < offsets_[i + 1]; ++k) {
+            owners_[k] = static_cast<std::uint32_t>(i);
+        }
+    }
 }
 
 std::vector<std::uint32_t> NeighbourList::build(ParticleStore& p, bool sort) {
@@ -46,6 +56,7 @@ std::vector<std::uint32_t> NeighbourList::build(ParticleStore& p, bool sort) {
 
     offsets_.assign(1, 0);
     partners_.clear();
+    owners_.clear();
     shear_.clear();
     if (n == 0) {
         x_build_.clear();
@@ -179,6 +190,7 @@ std::vector<std::uint32_t> NeighbourList::build(ParticleStore& p, bool sort) {
         }
     }
 
+    fill_owners();
     old_ids_ = p.id;
     x_build_ = p.x;
     return applied;

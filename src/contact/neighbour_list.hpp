@@ -28,6 +28,8 @@ class NeighbourList {
     [[nodiscard]] const std::vector<std::uint32_t>& offsets() const { return offsets_; }
     /// Partner indices (j > i is not guaranteed; each unordered pair appears once).
     [[nodiscard]] const std::vector<std::uint32_t>& partners() const { return partners_; }
+    /// Owning particle i of each entry (the row it sits in).
+    [[nodiscard]] const std::vector<std::uint32_t>& owners() const { return owners_; }
     /// Tangential history per entry (m, world; displacement of i relative to j).
     [[nodiscard]] std::vector<Vec3>& shear() { return shear_; }
     [[nodiscard]] const std::vector<Vec3>& shear() const { return shear_; }
@@ -48,7 +50,9 @@ class NeighbourList {
     long builds_ = 0;
     std::vector<std::uint32_t> offsets_{0};
     std::vector<std::uint32_t> partners_;
+    std::vector<std::uint32_t> owners_;
     std::vector<Vec3> shear_;
+    void fill_owners();
     std::vector<Vec3> x_build_;
     // Scratch reused between builds.
     std::vector<std::uint32_t> cell_of_, cell_start_, order_, old_row_of_id_;

@@ -113,7 +113,8 @@ class System {
     ParticleStore p_;
     contact::NeighbourList nl_;
     std::vector<Vec3> wall_shear_;  // [particle * n_walls + wall]
-    std::vector<std::vector<std::uint32_t>> wall_candidates_;  // per wall: particles within the skin
+    std::vector<std::vector<std::uint32_t>> wall_candidates_;
+    std::vector<std::uint32_t> active_;  // scratch: list entries in contact this step  // per wall: particles within the skin
     ContactCounters counters_;
     TimeStepReport ts_;
     std::vector<std::string> warnings_;

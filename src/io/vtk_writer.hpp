@@ -1,0 +1,46 @@
+#pragma once
+// VTK XML output that ParaView opens: a particle series (.vtp frames listed in a .pvd collection)
+// and the analytic walls as polydata. The only file in kiln that includes VTK headers.
+
+#include "dynamics/scene_spec.hpp"
+#include "dynamics/system.hpp"
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace kiln::io {
+
+/// Writes particle frames out_dir/particles/particles_NNNNNN.vtp and keeps out_dir/particles.pvd
+/// listing every frame written so far, so the series can be opened at any moment during a run.
+class ParticleSeriesWriter {
+  public:
+    /// Creates out_dir/particles/; throws InputError when it cannot.
+    explicit ParticleSeriesWriter(const std::filesystem::path& out_dir);
+
+    /// Writes the particles of `sys` as the next frame (positions in m, world frame; SI fields)
+    /// and rewrites particles.pvd atomically. Throws InputError when a file cannot be written.
+    void write(const dynamics::System& sys);
+
+    /// Writes the walls of `scene` to `file` (.vtp): planes as rectangles covering the particle
+    /// region enlarged by 20 %, cylinders as open 48-sided tubes over that region (m, world frame).
+    /// Cell data "wall" is the wall index. Throws InputError when the file cannot be written.
+    void write_walls(const dynamics::SceneSpec& scene, const std::filesystem::path& file) const;
+
+    /// Number of particle frames written so far.
+    [[nodiscard]] std::size_t frames() const { return frames_.size(); }
+
+  private:
+    /// One written frame: simulated time (s) and file path relative to the output folder.
+    struct Frame {
+        double time;
+        std::string file;
+    };
+
+    void write_collection() const;
+
+    std::filesystem::path dir_;
+    std::vector<Frame> frames_;
+};
+
+} // namespace kiln::io
