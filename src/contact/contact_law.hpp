@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <variant>
 
 namespace kiln::contact {
@@ -71,19 +72,6 @@ struct ContactOutput {
 
 namespace detail {
 
-/// Rotates the shear history into the current tangent plane, keeping its length.
-inline void project_shear(Vec3& shear, const Vec3& n) {
-    const double len2 = shear.squaredNorm();
-    if (len2 == 0.0) {
-        return;
-    }
-    shear -= shear.dot(n) * n;
-    const double new2 = shear.squaredNorm();
-    if (new2 > 0.0) {
-        shear *= std::sqrt(len2 / new2);
-    }
-}
-
 struct Stiffness {
     double kn;      // normal secant stiffness, F_el = kn * delta (N/m)
     double gn;      // normal damping coefficient (kg/s), >= 0
@@ -92,75 +80,169 @@ struct Stiffness {
     double energy;  // elastic energy of the normal spring (J)
 };
 
-inline Stiffness stiffness(const HertzMindlin&, const PairProperties& p, const ContactInput& c) {
-    const double a = std::sqrt(c.r_eff * c.overlap); // contact radius (m)
-    const double sn = 2.0 * p.effective_modulus * a;
-    const double st = 8.0 * p.effective_shear * a;
+inline Stiffness stiffness(const HertzMindlin&, double e_star, double g_star, double beta,
+                           double r_eff, double m_eff, double overlap) {
+    const double a = std::sqrt(r_eff * overlap); // contact radius (m)
+    const double sn = 2.0 * e_star * a;
+    const double st = 8.0 * g_star * a;
     constexpr double k56 = 1.8257418583505538; // 2 sqrt(5/6)
     const double kn = 2.0 / 3.0 * sn;           // 4/3 E* sqrt(R* delta)
-    return {kn, -k56 * p.beta * std::sqrt(sn * c.m_eff), st, -k56 * p.beta * std::sqrt(st * c.m_eff),
-            0.4 * kn * c.overlap * c.overlap};
+    return {kn, -k56 * beta * std::sqrt(sn * m_eff), st, -k56 * beta * std::sqrt(st * m_eff),
+            0.4 * kn * overlap * overlap};
 }
 
-inline Stiffness stiffness(const LinearSpringDashpot& law, const PairProperties& p,
-                           const ContactInput& c) {
-    return {law.stiffness, -2.0 * p.beta * std::sqrt(c.m_eff * law.stiffness),
-            law.tangential_ratio * law.stiffness, 0.0,
-            0.5 * law.stiffness * c.overlap * c.overlap};
+inline Stiffness stiffness(const LinearSpringDashpot& law, double, double, double beta, double,
+                           double m_eff, double overlap) {
+    return {law.stiffness, -2.0 * beta * std::sqrt(m_eff * law.stiffness),
+            law.tangential_ratio * law.stiffness, 0.0, 0.5 * law.stiffness * overlap * overlap};
 }
 
 } // namespace detail
 
+/// Normal-force floor of a model: 0 when clamped, -inf otherwise (N).
+inline double floor_of(const ContactModel& m) {
+    return m.clamp_normal_force ? 0.0 : -std::numeric_limits<double>::infinity();
+}
+/// 1 when the model has rolling resistance, else 0.
+inline double rolling_of(const ContactModel& m) {
+    return m.rolling == RollingModel::constant_torque ? 1.0 : 0.0;
+}
+
+/// B contacts in structure-of-arrays form (world frame), the layout the pair kernel vectorises.
+/// Index [component][contact] for vectors. Inputs as in ContactInput and PairProperties; `s` is the
+/// tangential history, updated in place.
+template <std::size_t B>
+struct ContactBlock {
+    double n[3][B], overlap[B], r_eff[B], m_eff[B], lever_i[B], lever_j[B]; // geometry
+    double v[3][B], wi[3][B], wj[3][B];                                    // kinematics
+    double e_star[B], g_star[B], beta[B], mu[B], mu_roll[B];               // pair properties
+    double s[3][B];                                                        // history, in/out
+    double f[3][B], ti[3][B], tj[3][B], fn[B], energy[B];                  // results
+
+    /// Copies the pair properties of contact b.
+    void set_pair(std::size_t b, const PairProperties& p) {
+        e_star[b] = p.effective_modulus;
+        g_star[b] = p.effective_shear;
+        beta[b] = p.beta;
+        mu[b] = p.friction;
+        mu_roll[b] = p.rolling_friction;
+    }
+};
+
+/// Evaluates contact b of a block; written without branches so that a loop over b vectorises.
+/// This is the single implementation of the laws above; `evaluate` wraps it for one contact.
+/// `fn_floor` is 0 when the normal force is clamped, -inf otherwise; `rolling` is 1 with rolling
+/// resistance, 0 without (scalars, so the loop carries no flag loads).
+template <class Law, std::size_t B>
+[[gnu::always_inline]] inline void evaluate_block(const Law& law, double fn_floor, double rolling,
+                                                  ContactBlock<B>& c, std::size_t b, double dt) {
+    const detail::Stiffness k =
+        detail::stiffness(law, c.e_star[b], c.g_star[b], c.beta[b], c.r_eff[b], c.m_eff[b], c.overlap[b]);
+    const double n0 = c.n[0][b];
+    const double n1 = c.n[1][b];
+    const double n2 = c.n[2][b];
+    const double vn = c.v[0][b] * n0 + c.v[1][b] * n1 + c.v[2][b] * n2;
+    double fn = k.kn * c.overlap[b] - k.gn * vn;
+    fn = std::max(fn, fn_floor);
+
+    // Tangential velocity of the contact point of i relative to j: v - (l_i w_i + l_j w_j) x n.
+    const double w0 = c.lever_i[b] * c.wi[0][b] + c.lever_j[b] * c.wj[0][b];
+    const double w1 = c.lever_i[b] * c.wi[1][b] + c.lever_j[b] * c.wj[1][b];
+    const double w2 = c.lever_i[b] * c.wi[2][b] + c.lever_j[b] * c.wj[2][b];
+    const double vc0 = c.v[0][b] - (w1 * n2 - w2 * n1);
+    const double vc1 = c.v[1][b] - (w2 * n0 - w0 * n2);
+    const double vc2 = c.v[2][b] - (w0 * n1 - w1 * n0);
+    const double vcn = vc0 * n0 + vc1 * n1 + vc2 * n2;
+    const double vt0 = vc0 - vcn * n0;
+    const double vt1 = vc1 - vcn * n1;
+    const double vt2 = vc2 - vcn * n2;
+
+    // History: rotate into the tangent plane keeping its length, then add this step's slip.
+    double s0 = c.s[0][b];
+    double s1 = c.s[1][b];
+    double s2 = c.s[2][b];
+    const double len2 = s0 * s0 + s1 * s1 + s2 * s2;
+    const double sn = s0 * n0 + s1 * n1 + s2 * n2;
+    s0 -= sn * n0;
+    s1 -= sn * n1;
+    s2 -= sn * n2;
+    const double new2 = s0 * s0 + s1 * s1 + s2 * s2;
+    // Square roots and divisions are taken of safe arguments and selected afterwards: no branches.
+    const double keep_raw = std::sqrt(len2 / (new2 > 0.0 ? new2 : 1.0));
+    const double keep = new2 > 0.0 ? keep_raw : 1.0;
+    s0 = s0 * keep + vt0 * dt;
+    s1 = s1 * keep + vt1 * dt;
+    s2 = s2 * keep + vt2 * dt;
+    double ft0 = -k.kt * s0 - k.gt * vt0;
+    double ft1 = -k.kt * s1 - k.gt * vt1;
+    double ft2 = -k.kt * s2 - k.gt * vt2;
+
+    // Coulomb: when sliding, cap the force and reset the spring so it carries exactly the cap.
+    // Without friction there is no spring and no history.
+    const double ftsq = ft0 * ft0 + ft1 * ft1 + ft2 * ft2;
+    const double cap = c.mu[b] * std::abs(fn);
+    const bool slide = ftsq > cap * cap;
+    const double on = c.mu[b] > 0.0 ? 1.0 : 0.0;
+    const double capped = cap / std::sqrt(ftsq > 0.0 ? ftsq : 1.0);
+    const double scale = on * (slide ? capped : 1.0);
+    ft0 *= scale;
+    ft1 *= scale;
+    ft2 *= scale;
+    const double inv_kt = 1.0 / k.kt;
+    c.s[0][b] = on * (slide ? -ft0 * inv_kt : s0);
+    c.s[1][b] = on * (slide ? -ft1 * inv_kt : s1);
+    c.s[2][b] = on * (slide ? -ft2 * inv_kt : s2);
+    c.f[0][b] = fn * n0 + ft0;
+    c.f[1][b] = fn * n1 + ft1;
+    c.f[2][b] = fn * n2 + ft2;
+    const double nxf0 = n1 * ft2 - n2 * ft1;
+    const double nxf1 = n2 * ft0 - n0 * ft2;
+    const double nxf2 = n0 * ft1 - n1 * ft0;
+
+    // Rolling resistance, constant directional torque.
+    const double wr0 = c.wi[0][b] - c.wj[0][b];
+    const double wr1 = c.wi[1][b] - c.wj[1][b];
+    const double wr2 = c.wi[2][b] - c.wj[2][b];
+    const double wn = std::sqrt(wr0 * wr0 + wr1 * wr1 + wr2 * wr2);
+    const double mr_raw = -rolling * c.mu_roll[b] * c.r_eff[b] * std::abs(fn) / (wn > 1e-12 ? wn : 1.0);
+    const double mr = wn > 1e-12 ? mr_raw : 0.0;
+    c.ti[0][b] = -c.lever_i[b] * nxf0 + mr * wr0;
+    c.ti[1][b] = -c.lever_i[b] * nxf1 + mr * wr1;
+    c.ti[2][b] = -c.lever_i[b] * nxf2 + mr * wr2;
+    c.tj[0][b] = -c.lever_j[b] * nxf0 - mr * wr0;
+    c.tj[1][b] = -c.lever_j[b] * nxf1 - mr * wr1;
+    c.tj[2][b] = -c.lever_j[b] * nxf2 - mr * wr2;
+    c.fn[b] = fn;
+    c.energy[b] = k.energy;
+}
+
 /// Evaluates one contact and updates its tangential history `shear` (m, world, on i relative to j).
 template <class Law>
-[[gnu::always_inline]] inline ContactOutput evaluate(const Law& law, const ContactModel& model, const PairProperties& p,
-                              const ContactInput& c, Vec3& shear, double dt) {
-    const detail::Stiffness s = detail::stiffness(law, p, c);
-    const double vn = c.v_rel.dot(c.n);
-    double fn = s.kn * c.overlap - s.gn * vn;
-    if (model.clamp_normal_force && fn < 0.0) {
-        fn = 0.0;
+[[gnu::always_inline]] inline ContactOutput evaluate(const Law& law, const ContactModel& model,
+                                                     const PairProperties& p, const ContactInput& in,
+                                                     Vec3& shear, double dt) {
+    ContactBlock<1> c;
+    for (int a = 0; a < 3; ++a) {
+        c.n[a][0] = in.n[a];
+        c.v[a][0] = in.v_rel[a];
+        c.wi[a][0] = in.omega_i[a];
+        c.wj[a][0] = in.omega_j[a];
+        c.s[a][0] = shear[a];
     }
+    c.overlap[0] = in.overlap;
+    c.r_eff[0] = in.r_eff;
+    c.m_eff[0] = in.m_eff;
+    c.lever_i[0] = in.lever_i;
+    c.lever_j[0] = in.lever_j;
+    c.set_pair(0, p);
+    evaluate_block(law, floor_of(model), rolling_of(model), c, 0, dt);
     ContactOutput out;
-    out.normal_force = fn;
-    out.elastic_energy = s.energy;
-    out.force = fn * c.n;
-    out.torque_i.setZero();
-    out.torque_j.setZero();
-
-    // Tangential velocity of the contact point of i relative to j.
-    const Vec3 w = c.lever_i * c.omega_i + c.lever_j * c.omega_j;
-    const Vec3 vc = c.v_rel - w.cross(c.n);
-    const Vec3 vt = vc - vc.dot(c.n) * c.n;
-
-    if (p.friction > 0.0) {
-        detail::project_shear(shear, c.n);
-        shear += vt * dt;
-        Vec3 ft = -s.kt * shear - s.gt * vt;
-        const double ft2 = ft.squaredNorm();
-        const double cap = p.friction * std::abs(fn);
-        if (ft2 > cap * cap) {
-            // Sliding: cap the force and reset the spring so it carries exactly the capped force.
-            ft *= cap / std::sqrt(ft2);
-            shear = -(ft + s.gt * vt) / s.kt;
-        }
-        out.force += ft;
-        const Vec3 nxf = c.n.cross(ft);
-        out.torque_i = -c.lever_i * nxf;
-        out.torque_j = -c.lever_j * nxf;
-    } else {
-        shear.setZero();
-    }
-
-    if (model.rolling == RollingModel::constant_torque && p.rolling_friction > 0.0) {
-        const Vec3 wr = c.omega_i - c.omega_j;
-        const double wn = wr.norm();
-        if (wn > 1e-12) {
-            const Vec3 mr = -(p.rolling_friction * c.r_eff * std::abs(fn) / wn) * wr;
-            out.torque_i += mr;
-            out.torque_j -= mr;
-        }
-    }
+    out.force = Vec3(c.f[0][0], c.f[1][0], c.f[2][0]);
+    out.torque_i = Vec3(c.ti[0][0], c.ti[1][0], c.ti[2][0]);
+    out.torque_j = Vec3(c.tj[0][0], c.tj[1][0], c.tj[2][0]);
+    out.normal_force = c.fn[0];
+    out.elastic_energy = c.energy[0];
+    shear = Vec3(c.s[0][0], c.s[1][0], c.s[2][0]);
     return out;
 }
 

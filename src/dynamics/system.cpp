@@ -174,35 +174,56 @@ void System::pair_forces(const Law& law) {
         shear[k] *= touch ? 1.0 : 0.0;
     }
 
-    // Pass 2: forces of the touching pairs.
-    for (std::size_t a = 0; a < n_active; ++a) {
-        const std::uint32_t k = active_[a];
-        const std::uint32_t i = owner[k];
-        const std::uint32_t j = nb[k];
-        const double ri = p_.radius[i];
-        const double rj = p_.radius[j];
-        const Vec3 d = p_.x[i] - p_.x[j];
-        const double rsum = ri + rj;
-        const double dist = d.norm();
-        const double overlap = rsum - dist;
-        contact::ContactInput c;
-        c.n = d / dist;
-        c.overlap = overlap;
-        c.r_eff = ri * rj / rsum;
-        c.m_eff = p_.mass[i] * p_.mass[j] / (p_.mass[i] + p_.mass[j]);
-        c.lever_i = ri - 0.5 * overlap;
-        c.lever_j = rj - 0.5 * overlap;
-        c.v_rel = p_.v[i] - p_.v[j];
-        c.omega_i = p_.omega[i];
-        c.omega_j = p_.omega[j];
-        const PairProperties& pp = pairs_.at(p_.material[i], p_.material[j]);
-        const contact::ContactOutput o = contact::evaluate(law, spec_.contact, pp, c, shear[k], dt);
-        p_.force[i] += o.force;
-        p_.force[j] -= o.force;
-        p_.torque[i] += o.torque_i;
-        p_.torque[j] += o.torque_j;
-        counters_.elastic_energy += o.elastic_energy;
-        counters_.max_overlap_ratio = std::max(counters_.max_overlap_ratio, overlap / (2.0 * std::min(ri, rj)));
+    // Pass 2: forces of the touching pairs, in blocks: gather, evaluate (vectorised, the contacts
+    // of a block are independent), scatter.
+    constexpr std::size_t block = 16;
+    const double fn_floor = contact::floor_of(spec_.contact);
+    const double rolling = contact::rolling_of(spec_.contact);
+    contact::ContactBlock<block> c; // on the stack, so the vectoriser sees it does not alias
+    for (std::size_t a0 = 0; a0 < n_active; a0 += block) {
+        const std::size_t m = std::min(block, n_active - a0);
+        for (std::size_t b = 0; b < m; ++b) {
+            const std::uint32_t k = active_[a0 + b];
+            const std::uint32_t i = owner[k];
+            const std::uint32_t j = nb[k];
+            const double ri = p_.radius[i];
+            const double rj = p_.radius[j];
+            const Vec3 d = p_.x[i] - p_.x[j];
+            const double rsum = ri + rj;
+            const double dist = d.norm();
+            const double overlap = rsum - dist;
+            for (int q = 0; q < 3; ++q) {
+                c.n[q][b] = d[q] / dist;
+                c.v[q][b] = p_.v[i][q] - p_.v[j][q];
+                c.wi[q][b] = p_.omega[i][q];
+                c.wj[q][b] = p_.omega[j][q];
+                c.s[q][b] = shear[k][q];
+            }
+            c.overlap[b] = overlap;
+            c.r_eff[b] = ri * rj / rsum;
+            c.m_eff[b] = p_.mass[i] * p_.mass[j] / (p_.mass[i] + p_.mass[j]);
+            c.lever_i[b] = ri - 0.5 * overlap;
+            c.lever_j[b] = rj - 0.5 * overlap;
+            c.set_pair(b, pairs_.at(p_.material[i], p_.material[j]));
+        }
+#pragma omp simd
+        for (std::size_t b = 0; b < m; ++b) {
+            contact::evaluate_block(law, fn_floor, rolling, c, b, dt);
+        }
+        for (std::size_t b = 0; b < m; ++b) {
+            const std::uint32_t k = active_[a0 + b];
+            const std::uint32_t i = owner[k];
+            const std::uint32_t j = nb[k];
+            const Vec3 f(c.f[0][b], c.f[1][b], c.f[2][b]);
+            p_.force[i] += f;
+            p_.force[j] -= f;
+            p_.torque[i] += Vec3(c.ti[0][b], c.ti[1][b], c.ti[2][b]);
+            p_.torque[j] += Vec3(c.tj[0][b], c.tj[1][b], c.tj[2][b]);
+            shear[k] = Vec3(c.s[0][b], c.s[1][b], c.s[2][b]);
+            counters_.elastic_energy += c.energy[b];
+            counters_.max_overlap_ratio = std::max(
+                counters_.max_overlap_ratio, c.overlap[b] / (2.0 * std::min(p_.radius[i], p_.radius[j])));
+        }
     }
     counters_.particle_contacts = static_cast<long>(n_active);
 }

@@ -1,6 +1,7 @@
 #pragma once
 // The mechanical system: particles, walls and contacts advanced by velocity Verlet.
 
+#include "contact/contact_law.hpp"
 #include "contact/neighbour_list.hpp"
 #include "core/particle_store.hpp"
 #include "dynamics/scene_spec.hpp"
@@ -114,7 +115,7 @@ class System {
     contact::NeighbourList nl_;
     std::vector<Vec3> wall_shear_;  // [particle * n_walls + wall]
     std::vector<std::vector<std::uint32_t>> wall_candidates_;
-    std::vector<std::uint32_t> active_;  // scratch: list entries in contact this step  // per wall: particles within the skin
+    std::vector<std::uint32_t> active_;  // scratch: list entries in contact this step
     ContactCounters counters_;
     TimeStepReport ts_;
     std::vector<std::string> warnings_;
