@@ -33,7 +33,8 @@ int main(int argc, char** argv) {
             fmt::print("{}", spec.resolved_toml);
             return 0;
         }
-        opt.out_dir = out_dir.empty() ? std::filesystem::path("out") / spec.run.name : out_dir;
+        opt.out_dir = out_dir.empty() ? std::filesystem::path("out") / spec.run.name
+                                      : std::filesystem::path(out_dir);
         opt.restart = restart;
         return kiln::app::run_case(spec, opt);
     } catch (const kiln::InputError& e) {

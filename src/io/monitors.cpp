@@ -1,0 +1,205 @@
+#include "io/monitors.hpp"
+
+#include "core/error.hpp"
+#include "io/case_spec.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <limits>
+
+namespace kiln::io {
+
+namespace {
+
+/// Monitors in the order of monitor_names().
+enum class Monitor {
+    time,
+    step,
+    kinetic_energy,
+    rotational_energy,
+    potential_energy,
+    elastic_energy,
+    total_energy,
+    contacts,
+    wall_contacts,
+    coordination,
+    max_overlap_ratio,
+    max_velocity,
+    mean_height,
+    max_height,
+    neighbour_builds,
+    count
+};
+
+/// Index of `name` in monitor_names(); throws InputError when it is not there.
+int monitor_index(const std::string& name) {
+    const auto& all = monitor_names();
+    const auto it = std::find(all.begin(), all.end(), name);
+    if (it == all.end()) {
+        throw InputError(
+            fmt::format("unknown monitor '{}'; allowed: {}", name, fmt::join(all, ", ")));
+    }
+    return static_cast<int>(it - all.begin());
+}
+
+/// Heights of the particles along the direction opposing gravity (m).
+struct Heights {
+    double mean = 0; ///< mean height (m), NaN without particles
+    double max = 0;  ///< largest height (m), NaN without particles
+};
+
+/// Evaluates monitors of one System state; sums over particles are computed once and shared.
+class Sampler {
+  public:
+    explicit Sampler(const dynamics::System& sys) : sys_(sys) {}
+
+    /// Value of monitor `m` (SI units).
+    double value(Monitor m) {
+        const auto& c = sys_.counters();
+        switch (m) {
+        case Monitor::time: return sys_.time();
+        case Monitor::step: return static_cast<double>(sys_.step_count());
+        case Monitor::kinetic_energy: return energies().kinetic;
+        case Monitor::rotational_energy: return energies().rotational;
+        case Monitor::potential_energy: return energies().potential;
+        case Monitor::elastic_energy: return energies().elastic;
+        case Monitor::total_energy: return energies().total();
+        case Monitor::contacts: return static_cast<double>(c.particle_contacts);
+        case Monitor::wall_contacts: return static_cast<double>(c.wall_contacts);
+        case Monitor::coordination: return coordination();
+        case Monitor::max_overlap_ratio: return c.max_overlap_ratio;
+        case Monitor::max_velocity: return max_velocity();
+        case Monitor::mean_height: return heights().mean;
+        case Monitor::max_height: return heights().max;
+        case Monitor::neighbour_builds: return static_cast<double>(sys_.neighbour_builds());
+        case Monitor::count: break;
+        }
+        KILN_ASSERT(false);
+        return std::numeric_limits<double>::quiet_NaN();
+    }
+
+  private:
+    const dynamics::Energies& energies() {
+        if (!have_energies_) {
+            energies_ = sys_.energies();
+            have_energies_ = true;
+        }
+        return energies_;
+    }
+
+    /// 2 * particle contacts / particles (-); 0 without particles.
+    [[nodiscard]] double coordination() const {
+        const std::size_t n = sys_.particles().size();
+        return n == 0 ? 0.0
+                      : 2.0 * static_cast<double>(sys_.counters().particle_contacts) /
+                            static_cast<double>(n);
+    }
+
+    /// Largest speed |v| (m/s); 0 without particles.
+    [[nodiscard]] double max_velocity() const {
+        double v2 = 0;
+        for (const Vec3& v : sys_.particles().v) {
+            v2 = std::max(v2, v.squaredNorm());
+        }
+        return std::sqrt(v2);
+    }
+
+    const Heights& heights() {
+        if (!have_heights_) {
+            const Vec3& g = sys_.spec().gravity;
+            const double g_norm = g.norm();
+            const Vec3 up = g_norm > 0.0 ? Vec3(-g / g_norm) : Vec3::UnitZ();
+            const auto& x = sys_.particles().x;
+            Heights h;
+            if (x.empty()) {
+                h.mean = h.max = std::numeric_limits<double>::quiet_NaN();
+            } else {
+                double sum = 0;
+                h.max = -std::numeric_limits<double>::infinity();
+                for (const Vec3& p : x) {
+                    const double z = p.dot(up);
+                    sum += z;
+                    h.max = std::max(h.max, z);
+                }
+                h.mean = sum / static_cast<double>(x.size());
+            }
+            heights_ = h;
+            have_heights_ = true;
+        }
+        return heights_;
+    }
+
+    const dynamics::System& sys_;
+    bool have_energies_ = false;
+    dynamics::Energies energies_;
+    bool have_heights_ = false;
+    Heights heights_;
+};
+
+} // namespace
+
+const std::vector<std::string>& monitor_names() {
+    static const std::vector<std::string> names = {"time",
+                                                   "step",
+                                                   "kinetic_energy",
+                                                   "rotational_energy",
+                                                   "potential_energy",
+                                                   "elastic_energy",
+                                                   "total_energy",
+                                                   "contacts",
+                                                   "wall_contacts",
+                                                   "coordination",
+                                                   "max_overlap_ratio",
+                                                   "max_velocity",
+                                                   "mean_height",
+                                                   "max_height",
+                                                   "neighbour_builds"};
+    KILN_ASSERT(names.size() == static_cast<std::size_t>(Monitor::count));
+    return names;
+}
+
+double monitor_value(const dynamics::System& sys, const std::string& name) {
+    Sampler s(sys);
+    return s.value(static_cast<Monitor>(monitor_index(name)));
+}
+
+void MonitorWriter::Closer::operator()(std::FILE* f) const {
+    std::fclose(f);
+}
+
+MonitorWriter::MonitorWriter(const std::filesystem::path& csv, std::vector<std::string> names)
+    : file_(csv), names_(std::move(names)) {
+    columns_.reserve(names_.size());
+    for (const auto& n : names_) {
+        columns_.push_back(monitor_index(n));
+    }
+    if (names_.empty()) {
+        return;
+    }
+    out_.reset(std::fopen(file_.c_str(), "w"));
+    if (!out_) {
+        throw InputError(file_.string(), 0, "", "cannot create the monitor file");
+    }
+    put(fmt::format("{}\n", fmt::join(names_, ",")));
+}
+
+void MonitorWriter::write(const dynamics::System& sys) {
+    Sampler s(sys);
+    last_row_.resize(columns_.size());
+    for (std::size_t k = 0; k < columns_.size(); ++k) {
+        last_row_[k] = s.value(static_cast<Monitor>(columns_[k]));
+    }
+    if (out_) {
+        put(fmt::format("{:.10g}\n", fmt::join(last_row_, ",")));
+    }
+}
+
+void MonitorWriter::put(const std::string& line) {
+    if (std::fputs(line.c_str(), out_.get()) < 0 || std::fflush(out_.get()) != 0) {
+        throw InputError(file_.string(), 0, "", "cannot write the monitor file");
+    }
+}
+
+} // namespace kiln::io
