@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <limits>
+#include <utility>
 
 namespace kiln::io {
 
@@ -169,8 +170,8 @@ void MonitorWriter::Closer::operator()(std::FILE* f) const {
     std::fclose(f);
 }
 
-MonitorWriter::MonitorWriter(const std::filesystem::path& csv, std::vector<std::string> names)
-    : file_(csv), names_(std::move(names)) {
+MonitorWriter::MonitorWriter(std::filesystem::path csv, std::vector<std::string> names)
+    : file_(std::move(csv)), names_(std::move(names)) {
     columns_.reserve(names_.size());
     for (const auto& n : names_) {
         columns_.push_back(monitor_index(n));

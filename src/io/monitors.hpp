@@ -24,7 +24,7 @@ class MonitorWriter {
   public:
     /// Creates (truncates) `csv` and writes the header; no file is created when `names` is empty.
     /// Throws InputError for an unknown name or when the file cannot be written.
-    MonitorWriter(const std::filesystem::path& csv, std::vector<std::string> names);
+    MonitorWriter(std::filesystem::path csv, std::vector<std::string> names);
 
     /// Appends one row of the monitors of `sys`; throws InputError when the file cannot be written.
     void write(const dynamics::System& sys);

@@ -25,6 +25,7 @@
 #include <limits>
 #include <numbers>
 #include <system_error>
+#include <utility>
 #include <variant>
 
 namespace kiln::io {
@@ -163,7 +164,7 @@ int add_cylinder(const dynamics::CylinderWall& w, const Aabb& region, vtkPoints*
         pts->InsertNextPoint(Vec3(bottom + r).data());
         pts->InsertNextPoint(Vec3(top + r).data());
     }
-    for (int k = 0; k < cylinder_segments; ++k) {
+    for (vtkIdType k = 0; k < cylinder_segments; ++k) {
         const vtkIdType b0 = first + 2 * k;
         const vtkIdType b1 = first + 2 * ((k + 1) % cylinder_segments);
         const std::array<vtkIdType, 4> ids = {b0, b0 + 1, b1 + 1, b1};
@@ -174,7 +175,8 @@ int add_cylinder(const dynamics::CylinderWall& w, const Aabb& region, vtkPoints*
 
 } // namespace
 
-ParticleSeriesWriter::ParticleSeriesWriter(const std::filesystem::path& out_dir) : dir_(out_dir) {
+ParticleSeriesWriter::ParticleSeriesWriter(std::filesystem::path out_dir)
+    : dir_(std::move(out_dir)) {
     make_directory(dir_ / "particles");
 }
 

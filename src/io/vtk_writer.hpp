@@ -16,7 +16,7 @@ namespace kiln::io {
 class ParticleSeriesWriter {
   public:
     /// Creates out_dir/particles/; throws InputError when it cannot.
-    explicit ParticleSeriesWriter(const std::filesystem::path& out_dir);
+    explicit ParticleSeriesWriter(std::filesystem::path out_dir);
 
     /// Writes the particles of `sys` as the next frame (positions in m, world frame; SI fields)
     /// and rewrites particles.pvd atomically. Throws InputError when a file cannot be written.
