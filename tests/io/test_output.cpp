@@ -51,7 +51,9 @@ SceneSpec box_scene() {
     s.walls.push_back({"y1", PlaneWall{Vec3(0, box, 0), Vec3(0, -1, 0)}, 0});
     for (int k = 0; k < 6; ++k) {
         const double r = 0.8e-3 + 0.05e-3 * k;
-        const Vec3 x(0.002 + 0.003 * (k % 3), 0.003 + 0.004 * (k / 3), 0.002 + 0.001 * k);
+        const int column = k % 3;
+        const int row = k / 3;
+        const Vec3 x(0.002 + 0.003 * column, 0.003 + 0.004 * row, 0.002 + 0.001 * k);
         const Vec3 v(0.1 * k, -0.05 * k, 0.02);
         s.particles.push_back({0, r, x, v, Vec3(0, 0, 10.0 * k)});
     }
