@@ -29,8 +29,7 @@ std::vector<ContactInput> inputs(std::size_t n) {
     return v;
 }
 
-template <class Law>
-void contact_law(benchmark::State& state, Law law) {
+template <class Law> void contact_law(benchmark::State& state, Law law) {
     const kiln::Material m{"m", 5e6, 0.45, 2500, 0.3, 0.5, 0.0};
     const kiln::PairProperties p = kiln::PairTable({m}, {}).at(0, 0);
     const auto in = inputs(4096);
@@ -46,8 +45,12 @@ void contact_law(benchmark::State& state, Law law) {
     state.SetItemsProcessed(state.iterations() * static_cast<long>(in.size()));
 }
 
-void BM_HertzMindlin(benchmark::State& s) { contact_law(s, HertzMindlin{}); }
-void BM_LinearSpringDashpot(benchmark::State& s) { contact_law(s, LinearSpringDashpot{1e4, 2.0 / 7.0}); }
+void BM_HertzMindlin(benchmark::State& s) {
+    contact_law(s, HertzMindlin{});
+}
+void BM_LinearSpringDashpot(benchmark::State& s) {
+    contact_law(s, LinearSpringDashpot{1e4, 2.0 / 7.0});
+}
 BENCHMARK(BM_HertzMindlin);
 BENCHMARK(BM_LinearSpringDashpot);
 

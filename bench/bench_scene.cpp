@@ -37,8 +37,8 @@ void BM_PourFalling(benchmark::State& state) {
     for (auto _ : state) {
         sys.step();
     }
-    state.counters["particle_steps_per_s"] =
-        benchmark::Counter(static_cast<double>(state.iterations() * n), benchmark::Counter::kIsRate);
+    state.counters["particle_steps_per_s"] = benchmark::Counter(
+        static_cast<double>(state.iterations() * n), benchmark::Counter::kIsRate);
 }
 
 void BM_PourSettled(benchmark::State& state) {
@@ -50,8 +50,8 @@ void BM_PourSettled(benchmark::State& state) {
     for (auto _ : state) {
         sys.step();
     }
-    state.counters["particle_steps_per_s"] =
-        benchmark::Counter(static_cast<double>(state.iterations() * n), benchmark::Counter::kIsRate);
+    state.counters["particle_steps_per_s"] = benchmark::Counter(
+        static_cast<double>(state.iterations() * n), benchmark::Counter::kIsRate);
     state.counters["contacts_per_particle"] =
         static_cast<double>(sys.counters().particle_contacts) / static_cast<double>(n);
 }

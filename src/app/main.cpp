@@ -10,7 +10,8 @@
 
 int main(int argc, char** argv) {
     CLI::App cli{"kiln: discrete element method with non-spherical particles and heat"};
-    cli.set_version_flag("--version", std::string("kiln ") + kiln::version + " (git " + kiln::git_hash + ")");
+    cli.set_version_flag("--version",
+                         std::string("kiln ") + kiln::version + " (git " + kiln::git_hash + ")");
     cli.require_subcommand(1);
 
     std::string case_file;
@@ -23,7 +24,8 @@ int main(int argc, char** argv) {
     run->add_option("--restart", restart, "continue from this checkpoint file");
     run->add_flag("--quiet", opt.quiet, "no progress line and no summary on stdout");
 
-    auto* check = cli.add_subcommand("check", "validate a case file and print it with defaults filled in");
+    auto* check =
+        cli.add_subcommand("check", "validate a case file and print it with defaults filled in");
     check->add_option("case", case_file, "case file (TOML)")->required();
 
     CLI11_PARSE(cli, argc, argv);

@@ -31,10 +31,11 @@ long every(double interval, double dt) {
 
 int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
     io::make_directory(opt.out_dir);
-    io::write_text_file(opt.out_dir / "case.resolved.toml",
-                        fmt::format("# kiln {} (git {}), resolved from {}\n# every default filled in; "
-                                    "runs as it stands with `kiln run`\n\n{}",
-                                    kiln::version, kiln::git_hash, spec.source_file, spec.resolved_toml));
+    io::write_text_file(
+        opt.out_dir / "case.resolved.toml",
+        fmt::format("# kiln {} (git {}), resolved from {}\n# every default filled in; "
+                    "runs as it stands with `kiln run`\n\n{}",
+                    kiln::version, kiln::git_hash, spec.source_file, spec.resolved_toml));
 
     std::unique_ptr<dynamics::System> sys;
     try {
@@ -57,10 +58,11 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
     constexpr long finite_check_every = 1000;
 
     if (!opt.quiet) {
-        fmt::print("kiln {}: case '{}', {} particles, {} walls, {} steps of {:.3g} s\n", kiln::version,
-                   spec.run.name, sys->particles().size(), spec.scene.walls.size(), total - sys->step_count(),
-                   dt);
-        fmt::print("  critical step: Rayleigh {:.3g} s, contact time {:.3g} s (dt = {:.2g} of the smaller)\n",
+        fmt::print("kiln {}: case '{}', {} particles, {} walls, {} steps of {:.3g} s\n",
+                   kiln::version, spec.run.name, sys->particles().size(), spec.scene.walls.size(),
+                   total - sys->step_count(), dt);
+        fmt::print("  critical step: Rayleigh {:.3g} s, contact time {:.3g} s (dt = {:.2g} of the "
+                   "smaller)\n",
                    ts.rayleigh, ts.contact_time, dt / ts.limit);
     }
 
@@ -114,14 +116,17 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
         vtk.write(*sys);
     }
     progress.finish();
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
     summary.steps = sys->step_count() - first;
     summary.particles = static_cast<long>(sys->particles().size());
     summary.simulated_time = sys->time();
     summary.wall_seconds = wall;
     summary.particle_steps_per_second =
-        wall > 0.0 ? static_cast<double>(summary.steps) * static_cast<double>(summary.particles) / wall : 0.0;
+        wall > 0.0
+            ? static_cast<double>(summary.steps) * static_cast<double>(summary.particles) / wall
+            : 0.0;
     summary.neighbour_builds = sys->neighbour_builds();
     for (const auto& name : spec.output.monitors) {
         summary.final_monitors.emplace_back(name, io::monitor_value(*sys, name));

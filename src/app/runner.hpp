@@ -9,9 +9,9 @@ namespace kiln::app {
 
 /// Options of `kiln run`.
 struct RunOptions {
-    std::filesystem::path out_dir;  ///< output folder
-    std::filesystem::path restart;  ///< checkpoint to continue from (empty = fresh start)
-    bool quiet = false;             ///< no progress line, no summary on stdout
+    std::filesystem::path out_dir; ///< output folder
+    std::filesystem::path restart; ///< checkpoint to continue from (empty = fresh start)
+    bool quiet = false;            ///< no progress line, no summary on stdout
 };
 
 /// Runs the case; returns the process exit code (0 = completed). Input errors propagate as

@@ -1,17 +1,18 @@
 #pragma once
-// Contact force laws for two bodies touching at one point. A law is a small value type; the step loop
-// dispatches on the variant once per step, so the per-contact code is a direct (inlined) call.
+// Contact force laws for two bodies touching at one point. A law is a small value type; the step
+// loop dispatches on the variant once per step, so the per-contact code is a direct (inlined) call.
 //
 // Hertz-Mindlin: normal force after Hertz with the damping of Tsuji et al. (1992) written in the
 // restitution-based form of the LIGGGHTS manual (gamma_n = -2 sqrt(5/6) beta sqrt(S_n m*),
 // S_n = 2 E* sqrt(R* delta)), tangential spring after Mindlin, k_t = 8 G* sqrt(R* delta), with the
-// shear modulus combination of Di Renzo & Di Maio (2004), G* = 1/((2-nu1)/G1 + (2-nu2)/G2). Oschmann
-// (2019, Inv. VI/VII) prints (2 - nu^2)/G, which is a typo (notes/seed001_shape.md section 8.6).
+// shear modulus combination of Di Renzo & Di Maio (2004), G* = 1/((2-nu1)/G1 + (2-nu2)/G2).
+// Oschmann (2019, Inv. VI/VII) prints (2 - nu^2)/G, which is a typo (notes/seed001_shape.md
+// section 8.6).
 //
 // Linear spring-dashpot (Cundall & Strack 1979, as used in Oschmann 2019 Inv. I-IV, Table 1):
 // F_n = k_n delta - gamma_n v_n with gamma_n = -2 beta sqrt(m* k_n), which gives exactly the
-// prescribed restitution when the contact ends at delta = 0; tangential spring k_t = ratio * k_n with
-// a Coulomb cap and no tangential damper (as in the seed).
+// prescribed restitution when the contact ends at delta = 0; tangential spring k_t = ratio * k_n
+// with a Coulomb cap and no tangential damper (as in the seed).
 //
 // Rolling resistance: constant directional torque, model A of Ai et al. (2011),
 // M_r = -mu_r R* |F_n| omega_rel/|omega_rel|. The seed's Eq. 12 variant is not used (notes 8.5).
@@ -31,8 +32,8 @@ struct HertzMindlin {};
 
 /// Linear spring-dashpot law with a global normal stiffness.
 struct LinearSpringDashpot {
-    double stiffness = 0;         ///< k_n (N/m)
-    double tangential_ratio = 0;  ///< k_t / k_n (-)
+    double stiffness = 0;        ///< k_n (N/m)
+    double tangential_ratio = 0; ///< k_t / k_n (-)
 };
 
 /// The normal/tangential law of a scene.
@@ -43,41 +44,41 @@ enum class RollingModel { none, constant_torque };
 
 /// Everything that selects and tunes the contact model of a scene.
 struct ContactModel {
-    ContactLaw law = HertzMindlin{};             ///< normal and tangential law
-    RollingModel rolling = RollingModel::none;   ///< rolling resistance model
-    bool clamp_normal_force = true;              ///< forbid attractive (negative) normal force
+    ContactLaw law = HertzMindlin{};           ///< normal and tangential law
+    RollingModel rolling = RollingModel::none; ///< rolling resistance model
+    bool clamp_normal_force = true;            ///< forbid attractive (negative) normal force
 };
 
 /// Geometry and kinematics of one contact, world frame. Index i is the body receiving `force`.
 struct ContactInput {
-    Vec3 n;            ///< unit normal pointing from body j to body i
-    double overlap;    ///< delta > 0 (m)
-    double r_eff;      ///< effective radius R* (m)
-    double m_eff;      ///< effective mass m* (kg)
-    double lever_i;    ///< distance from centre of i to the contact point (m)
-    double lever_j;    ///< distance from centre of j to the contact point (m)
-    Vec3 v_rel;        ///< v_i - v_j of the centres (m/s)
-    Vec3 omega_i;      ///< angular velocity of i (rad/s)
-    Vec3 omega_j;      ///< angular velocity of j (rad/s)
+    Vec3 n;         ///< unit normal pointing from body j to body i
+    double overlap; ///< delta > 0 (m)
+    double r_eff;   ///< effective radius R* (m)
+    double m_eff;   ///< effective mass m* (kg)
+    double lever_i; ///< distance from centre of i to the contact point (m)
+    double lever_j; ///< distance from centre of j to the contact point (m)
+    Vec3 v_rel;     ///< v_i - v_j of the centres (m/s)
+    Vec3 omega_i;   ///< angular velocity of i (rad/s)
+    Vec3 omega_j;   ///< angular velocity of j (rad/s)
 };
 
 /// Result of one contact evaluation, world frame.
 struct ContactOutput {
-    Vec3 force;         ///< force on i (N); j receives -force
-    Vec3 torque_i;      ///< torque on i about its centre (N m)
-    Vec3 torque_j;      ///< torque on j about its centre (N m)
-    double normal_force; ///< signed normal force magnitude on i along n (N)
+    Vec3 force;            ///< force on i (N); j receives -force
+    Vec3 torque_i;         ///< torque on i about its centre (N m)
+    Vec3 torque_j;         ///< torque on j about its centre (N m)
+    double normal_force;   ///< signed normal force magnitude on i along n (N)
     double elastic_energy; ///< energy stored in the normal spring (J)
 };
 
 namespace detail {
 
 struct Stiffness {
-    double kn;      // normal secant stiffness, F_el = kn * delta (N/m)
-    double gn;      // normal damping coefficient (kg/s), >= 0
-    double kt;      // tangential stiffness (N/m)
-    double gt;      // tangential damping coefficient (kg/s), >= 0
-    double energy;  // elastic energy of the normal spring (J)
+    double kn;     // normal secant stiffness, F_el = kn * delta (N/m)
+    double gn;     // normal damping coefficient (kg/s), >= 0
+    double kt;     // tangential stiffness (N/m)
+    double gt;     // tangential damping coefficient (kg/s), >= 0
+    double energy; // elastic energy of the normal spring (J)
 };
 
 inline Stiffness stiffness(const HertzMindlin&, double e_star, double g_star, double beta,
@@ -86,7 +87,7 @@ inline Stiffness stiffness(const HertzMindlin&, double e_star, double g_star, do
     const double sn = 2.0 * e_star * a;
     const double st = 8.0 * g_star * a;
     constexpr double k56 = 1.8257418583505538; // 2 sqrt(5/6)
-    const double kn = 2.0 / 3.0 * sn;           // 4/3 E* sqrt(R* delta)
+    const double kn = 2.0 / 3.0 * sn;          // 4/3 E* sqrt(R* delta)
     return {kn, -k56 * beta * std::sqrt(sn * m_eff), st, -k56 * beta * std::sqrt(st * m_eff),
             0.4 * kn * overlap * overlap};
 }
@@ -111,13 +112,12 @@ inline double rolling_of(const ContactModel& m) {
 /// B contacts in structure-of-arrays form (world frame), the layout the pair kernel vectorises.
 /// Index [component][contact] for vectors. Inputs as in ContactInput and PairProperties; `s` is the
 /// tangential history, updated in place.
-template <std::size_t B>
-struct ContactBlock {
+template <std::size_t B> struct ContactBlock {
     double n[3][B], overlap[B], r_eff[B], m_eff[B], lever_i[B], lever_j[B]; // geometry
-    double v[3][B], wi[3][B], wj[3][B];                                    // kinematics
-    double e_star[B], g_star[B], beta[B], mu[B], mu_roll[B];               // pair properties
-    double s[3][B];                                                        // history, in/out
-    double f[3][B], ti[3][B], tj[3][B], fn[B], energy[B];                  // results
+    double v[3][B], wi[3][B], wj[3][B];                                     // kinematics
+    double e_star[B], g_star[B], beta[B], mu[B], mu_roll[B];                // pair properties
+    double s[3][B];                                                         // history, in/out
+    double f[3][B], ti[3][B], tj[3][B], fn[B], energy[B];                   // results
 
     /// Copies the pair properties of contact b.
     void set_pair(std::size_t b, const PairProperties& p) {
@@ -136,8 +136,8 @@ struct ContactBlock {
 template <class Law, std::size_t B>
 [[gnu::always_inline]] inline void evaluate_block(const Law& law, double fn_floor, double rolling,
                                                   ContactBlock<B>& c, std::size_t b, double dt) {
-    const detail::Stiffness k =
-        detail::stiffness(law, c.e_star[b], c.g_star[b], c.beta[b], c.r_eff[b], c.m_eff[b], c.overlap[b]);
+    const detail::Stiffness k = detail::stiffness(law, c.e_star[b], c.g_star[b], c.beta[b],
+                                                  c.r_eff[b], c.m_eff[b], c.overlap[b]);
     const double n0 = c.n[0][b];
     const double n1 = c.n[1][b];
     const double n2 = c.n[2][b];
@@ -204,7 +204,8 @@ template <class Law, std::size_t B>
     const double wr1 = c.wi[1][b] - c.wj[1][b];
     const double wr2 = c.wi[2][b] - c.wj[2][b];
     const double wn = std::sqrt(wr0 * wr0 + wr1 * wr1 + wr2 * wr2);
-    const double mr_raw = -rolling * c.mu_roll[b] * c.r_eff[b] * std::abs(fn) / (wn > 1e-12 ? wn : 1.0);
+    const double mr_raw =
+        -rolling * c.mu_roll[b] * c.r_eff[b] * std::abs(fn) / (wn > 1e-12 ? wn : 1.0);
     const double mr = wn > 1e-12 ? mr_raw : 0.0;
     c.ti[0][b] = -c.lever_i[b] * nxf0 + mr * wr0;
     c.ti[1][b] = -c.lever_i[b] * nxf1 + mr * wr1;
@@ -218,9 +219,9 @@ template <class Law, std::size_t B>
 
 /// Evaluates one contact and updates its tangential history `shear` (m, world, on i relative to j).
 template <class Law>
-[[gnu::always_inline]] inline ContactOutput evaluate(const Law& law, const ContactModel& model,
-                                                     const PairProperties& p, const ContactInput& in,
-                                                     Vec3& shear, double dt) {
+[[gnu::always_inline]] inline ContactOutput
+evaluate(const Law& law, const ContactModel& model, const PairProperties& p, const ContactInput& in,
+         Vec3& shear, double dt) {
     ContactBlock<1> c;
     for (int a = 0; a < 3; ++a) {
         c.n[a][0] = in.n[a];

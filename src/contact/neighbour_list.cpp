@@ -80,7 +80,9 @@ std::vector<std::uint32_t> NeighbourList::build(ParticleStore& p, bool sort) {
     while ((ext / cell).array().ceil().prod() > max_cells) {
         cell *= 1.26;
     }
-    const auto dim = [&](int a) { return std::max(1L, static_cast<long>(std::ceil(ext[a] / cell))); };
+    const auto dim = [&](int a) {
+        return std::max(1L, static_cast<long>(std::ceil(ext[a] / cell)));
+    };
     const long nx = dim(0);
     const long ny = dim(1);
     const long nz = dim(2);
@@ -94,7 +96,8 @@ std::vector<std::uint32_t> NeighbourList::build(ParticleStore& p, bool sort) {
     cell_of_.resize(n);
     cell_start_.assign(ncell + 1, 0);
     for (std::size_t i = 0; i < n; ++i) {
-        const long c = (coord(p.x[i], 2, nz) * ny + coord(p.x[i], 1, ny)) * nx + coord(p.x[i], 0, nx);
+        const long c =
+            (coord(p.x[i], 2, nz) * ny + coord(p.x[i], 1, ny)) * nx + coord(p.x[i], 0, nx);
         cell_of_[i] = static_cast<std::uint32_t>(c);
         ++cell_start_[static_cast<std::size_t>(c) + 1];
     }

@@ -1,7 +1,7 @@
 #pragma once
-// Broad phase: linked cells build a half Verlet list (each pair once) with a skin; the list is rebuilt
-// when any particle has moved more than half the skin since the last build. Each list entry carries
-// the pair's tangential contact history, which is carried over to the new list on rebuild.
+// Broad phase: linked cells build a half Verlet list (each pair once) with a skin; the list is
+// rebuilt when any particle has moved more than half the skin since the last build. Each list entry
+// carries the pair's tangential contact history, which is carried over to the new list on rebuild.
 
 #include "core/particle_store.hpp"
 
@@ -10,7 +10,8 @@
 
 namespace kiln::contact {
 
-/// Half neighbour list in compressed rows: the partners of particle i are j[offsets[i] .. offsets[i+1]).
+/// Half neighbour list in compressed rows: the partners of particle i are j[offsets[i] ..
+/// offsets[i+1]).
 class NeighbourList {
   public:
     /// `skin` is the extra distance (m) added to r_i + r_j when building.

@@ -22,10 +22,12 @@ std::string located(const std::string& file, long line, const std::string& key,
 
 InputError::InputError(const std::string& file, long line, const std::string& key,
                        const std::string& what)
-    : std::runtime_error(located(file, line, key, what)) {}
+    : std::runtime_error(located(file, line, key, what)) {
+}
 
 RunError::RunError(long step, const std::string& what)
-    : std::runtime_error(fmt::format("step {}: {}", step, what)) {}
+    : std::runtime_error(fmt::format("step {}: {}", step, what)) {
+}
 
 void assert_fail(const char* expr, const char* file, int line) {
     std::fprintf(stderr, "kiln internal error: assertion '%s' failed at %s:%d\n", expr, file, line);

@@ -1,5 +1,6 @@
 #pragma once
-// Two kinds of checks (see STYLE.md): KILN_ASSERT for programmer errors, InputError for bad user input.
+// Two kinds of checks (see STYLE.md): KILN_ASSERT for programmer errors, InputError for bad user
+// input.
 
 #include <stdexcept>
 #include <string>

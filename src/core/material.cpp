@@ -17,9 +17,11 @@ PairTable::PairTable(const std::vector<Material>& mats, const std::vector<PairOv
             const Material& m1 = mats[static_cast<std::size_t>(a)];
             const Material& m2 = mats[static_cast<std::size_t>(b)];
             PairProperties p;
-            p.effective_modulus = 1.0 / ((1.0 - m1.poisson_ratio * m1.poisson_ratio) / m1.youngs_modulus +
-                                         (1.0 - m2.poisson_ratio * m2.poisson_ratio) / m2.youngs_modulus);
-            // (2 - nu)/G, not the (2 - nu^2)/G printed in Oschmann 2019 (notes/seed001_shape.md, 8.6).
+            p.effective_modulus =
+                1.0 / ((1.0 - m1.poisson_ratio * m1.poisson_ratio) / m1.youngs_modulus +
+                       (1.0 - m2.poisson_ratio * m2.poisson_ratio) / m2.youngs_modulus);
+            // (2 - nu)/G, not the (2 - nu^2)/G printed in Oschmann 2019
+            // (notes/seed001_shape.md, 8.6).
             p.effective_shear = 1.0 / ((2.0 - m1.poisson_ratio) / m1.shear_modulus() +
                                        (2.0 - m2.poisson_ratio) / m2.shear_modulus());
             p.restitution = 0.5 * (m1.restitution + m2.restitution);

@@ -8,16 +8,18 @@ namespace kiln {
 
 /// A solid material. Mechanical constants are SI.
 struct Material {
-    std::string name;           ///< unique name used in case files
-    double youngs_modulus = 0;  ///< E (Pa)
-    double poisson_ratio = 0;   ///< nu (-), in (-1, 0.5)
-    double density = 0;         ///< rho (kg/m^3)
-    double restitution = 0;     ///< normal coefficient of restitution e (-), in (0, 1]
-    double friction = 0;        ///< sliding (Coulomb) friction coefficient mu (-)
+    std::string name;            ///< unique name used in case files
+    double youngs_modulus = 0;   ///< E (Pa)
+    double poisson_ratio = 0;    ///< nu (-), in (-1, 0.5)
+    double density = 0;          ///< rho (kg/m^3)
+    double restitution = 0;      ///< normal coefficient of restitution e (-), in (0, 1]
+    double friction = 0;         ///< sliding (Coulomb) friction coefficient mu (-)
     double rolling_friction = 0; ///< rolling friction coefficient mu_r (-), torque = mu_r R* |F_n|
 
     /// Shear modulus G = E / (2 (1 + nu)) (Pa).
-    [[nodiscard]] double shear_modulus() const { return youngs_modulus / (2.0 * (1.0 + poisson_ratio)); }
+    [[nodiscard]] double shear_modulus() const {
+        return youngs_modulus / (2.0 * (1.0 + poisson_ratio));
+    }
 };
 
 /// Explicit values for one pair of materials, overriding the mixing rule (negative = not given).
@@ -32,11 +34,11 @@ struct PairOverride {
 /// Contact properties of one (unordered) material pair, precomputed once.
 struct PairProperties {
     double effective_modulus = 0; ///< E* = 1/((1-nu1^2)/E1 + (1-nu2^2)/E2) (Pa)
-    double effective_shear = 0;   ///< G* = 1/((2-nu1)/G1 + (2-nu2)/G2) (Pa), Di Renzo & Di Maio 2004
-    double restitution = 0;       ///< e (-)
-    double beta = 0;              ///< ln e / sqrt(ln^2 e + pi^2) (-), <= 0
-    double friction = 0;          ///< mu (-)
-    double rolling_friction = 0;  ///< mu_r (-)
+    double effective_shear = 0;  ///< G* = 1/((2-nu1)/G1 + (2-nu2)/G2) (Pa), Di Renzo & Di Maio 2004
+    double restitution = 0;      ///< e (-)
+    double beta = 0;             ///< ln e / sqrt(ln^2 e + pi^2) (-), <= 0
+    double friction = 0;         ///< mu (-)
+    double rolling_friction = 0; ///< mu_r (-)
 };
 
 /// Symmetric table of PairProperties for all material pairs.

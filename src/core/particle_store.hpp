@@ -11,17 +11,18 @@ namespace kiln {
 
 /// Per-particle state of spherical particles. Vectors are in the world frame, SI units.
 struct ParticleStore {
-    std::vector<std::int64_t> id;      ///< stable particle identity (never reused)
+    std::vector<std::int64_t> id;       ///< stable particle identity (never reused)
     std::vector<std::int32_t> material; ///< index into the material table
     std::vector<double> radius;         ///< sphere radius (m)
     std::vector<double> mass;           ///< mass (kg)
     std::vector<double> inv_mass;       ///< 1/mass (1/kg)
-    std::vector<double> inv_inertia;    ///< 1/moment of inertia of a sphere, 1/(2/5 m r^2) (1/(kg m^2))
-    std::vector<Vec3> x;                ///< centre position (m, world)
-    std::vector<Vec3> v;                ///< velocity (m/s, world)
-    std::vector<Vec3> omega;            ///< angular velocity (rad/s, world)
-    std::vector<Vec3> force;            ///< total force of the current step (N, world)
-    std::vector<Vec3> torque;           ///< total torque about the centre (N m, world)
+    std::vector<double>
+        inv_inertia;          ///< 1/moment of inertia of a sphere, 1/(2/5 m r^2) (1/(kg m^2))
+    std::vector<Vec3> x;      ///< centre position (m, world)
+    std::vector<Vec3> v;      ///< velocity (m/s, world)
+    std::vector<Vec3> omega;  ///< angular velocity (rad/s, world)
+    std::vector<Vec3> force;  ///< total force of the current step (N, world)
+    std::vector<Vec3> torque; ///< total torque about the centre (N m, world)
 
     /// Number of particles.
     [[nodiscard]] std::size_t size() const { return x.size(); }
@@ -37,9 +38,11 @@ struct ParticleStore {
     void clear_forces();
 };
 
-/// Applies `order` (new k <- old order[k]) to one array; used by every module owning per-particle data.
+/// Applies `order` (new k <- old order[k]) to one array; used by every module owning per-particle
+/// data.
 template <class T>
-void permute_array(std::vector<T>& a, const std::vector<std::uint32_t>& order, std::vector<T>& scratch) {
+void permute_array(std::vector<T>& a, const std::vector<std::uint32_t>& order,
+                   std::vector<T>& scratch) {
     scratch.resize(order.size());
     for (std::size_t k = 0; k < order.size(); ++k) {
         scratch[k] = a[order[k]];

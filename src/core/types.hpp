@@ -1,6 +1,6 @@
 #pragma once
-// Small vector types used everywhere. All quantities are SI; the frame (world or body) is stated where
-// a vector is declared.
+// Small vector types used everywhere. All quantities are SI; the frame (world or body) is stated
+// where a vector is declared.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

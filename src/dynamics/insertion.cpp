@@ -105,16 +105,19 @@ void System::insert(const InsertSpec& ins) {
     if (ins.kind == InsertSpec::Kind::lattice) {
         const double a = ins.spacing > 0.0 ? ins.spacing : 2.0 * rmax;
         const Vec3 room = reg.extent() - Vec3::Constant(2.0 * rmax);
-        const auto count = [&](int k) { return room[k] < 0 ? 0L : 1 + static_cast<long>(room[k] / a); };
+        const auto count = [&](int k) {
+            return room[k] < 0 ? 0L : 1 + static_cast<long>(room[k] / a);
+        };
         const long nx = count(0);
         const long ny = count(1);
         const long nz = count(2);
         const long capacity = nx * ny * nz;
         if (capacity == 0 || (ins.count > capacity)) {
-            throw InputError("", 0, "insert.count",
-                             fmt::format("a lattice of spacing {:.4g} m in this region holds {} particles, "
-                                         "{} requested; enlarge the region or reduce count",
-                                         a, capacity, ins.count));
+            throw InputError(
+                "", 0, "insert.count",
+                fmt::format("a lattice of spacing {:.4g} m in this region holds {} particles, "
+                            "{} requested; enlarge the region or reduce count",
+                            a, capacity, ins.count));
         }
         const long want = ins.count > 0 ? ins.count : capacity;
         long placed = 0;
@@ -152,8 +155,9 @@ void System::insert(const InsertSpec& ins) {
             const double lo = reg.lo[k] + r;
             const double hi = reg.hi[k] - r;
             if (hi < lo) {
-                throw InputError("", 0, "insert.region",
-                                 fmt::format("region narrower than a particle of radius {:.4g} m", r));
+                throw InputError(
+                    "", 0, "insert.region",
+                    fmt::format("region narrower than a particle of radius {:.4g} m", r));
             }
             c[k] = std::uniform_real_distribution<double>(lo, hi)(rng_);
         }
@@ -166,11 +170,12 @@ void System::insert(const InsertSpec& ins) {
     }
     if (placed < ins.count) {
         const double vol = reg.extent().prod();
-        throw InputError("", 0, "insert.count",
-                         fmt::format("placed only {} of {} particles without overlap after {} attempts "
-                                     "(region volume {:.4g} m^3); enlarge the region or reduce count "
-                                     "(random placement reaches a solid fraction of about 0.3)",
-                                     placed, ins.count, attempts, vol));
+        throw InputError(
+            "", 0, "insert.count",
+            fmt::format("placed only {} of {} particles without overlap after {} attempts "
+                        "(region volume {:.4g} m^3); enlarge the region or reduce count "
+                        "(random placement reaches a solid fraction of about 0.3)",
+                        placed, ins.count, attempts, vol));
     }
 }
 

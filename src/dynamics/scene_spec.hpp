@@ -17,12 +17,12 @@ namespace kiln::dynamics {
 struct SizeDistribution {
     enum class Kind { constant, uniform, normal, discrete };
     Kind kind = Kind::constant;
-    double radius = 0;          ///< constant radius (m)
-    double min = 0;             ///< lower bound for uniform and (truncation of) normal (m)
-    double max = 0;             ///< upper bound for uniform and (truncation of) normal (m)
-    double mean = 0;            ///< mean radius of the normal distribution (m)
-    double stddev = 0;          ///< standard deviation of the normal distribution (m)
-    std::vector<double> values; ///< radii of the discrete distribution (m)
+    double radius = 0;           ///< constant radius (m)
+    double min = 0;              ///< lower bound for uniform and (truncation of) normal (m)
+    double max = 0;              ///< upper bound for uniform and (truncation of) normal (m)
+    double mean = 0;             ///< mean radius of the normal distribution (m)
+    double stddev = 0;           ///< standard deviation of the normal distribution (m)
+    std::vector<double> values;  ///< radii of the discrete distribution (m)
     std::vector<double> weights; ///< relative number weights of the discrete distribution (-)
 
     /// Largest radius the distribution can return (m).
@@ -35,40 +35,41 @@ struct SizeDistribution {
 struct InsertSpec {
     enum class Kind { lattice, random };
     Kind kind = Kind::random;
-    int material = 0;                 ///< material index
-    Aabb region;                      ///< particles lie entirely inside (m, world)
-    long count = 0;                   ///< number of particles (lattice: at most, 0 = fill)
-    SizeDistribution size;            ///< radii
-    double spacing = 0;               ///< lattice spacing (m), 0 = 2 r_max
-    Vec3 velocity = Vec3::Zero();     ///< initial velocity (m/s, world)
-    Vec3 omega = Vec3::Zero();        ///< initial angular velocity (rad/s, world)
+    int material = 0;             ///< material index
+    Aabb region;                  ///< particles lie entirely inside (m, world)
+    long count = 0;               ///< number of particles (lattice: at most, 0 = fill)
+    SizeDistribution size;        ///< radii
+    double spacing = 0;           ///< lattice spacing (m), 0 = 2 r_max
+    Vec3 velocity = Vec3::Zero(); ///< initial velocity (m/s, world)
+    Vec3 omega = Vec3::Zero();    ///< initial angular velocity (rad/s, world)
 };
 
 /// One explicitly placed particle.
 struct ParticleSpec {
-    int material = 0;                 ///< material index
-    double radius = 0;                ///< radius (m)
-    Vec3 x = Vec3::Zero();            ///< centre (m, world)
-    Vec3 v = Vec3::Zero();            ///< velocity (m/s, world)
-    Vec3 omega = Vec3::Zero();        ///< angular velocity (rad/s, world)
+    int material = 0;          ///< material index
+    double radius = 0;         ///< radius (m)
+    Vec3 x = Vec3::Zero();     ///< centre (m, world)
+    Vec3 v = Vec3::Zero();     ///< velocity (m/s, world)
+    Vec3 omega = Vec3::Zero(); ///< angular velocity (rad/s, world)
 };
 
 /// The mechanical scene.
 struct SceneSpec {
-    std::vector<Material> materials;        ///< material table
-    std::vector<PairOverride> pairs;        ///< explicit pair values
-    contact::ContactModel contact;          ///< contact model
-    double skin = 0;                        ///< neighbour-list skin (m), 0 = 10 % of the largest diameter
-    bool sort_particles = true;             ///< reorder particles by cell at each list build
-    std::vector<Wall> walls;                ///< walls
-    std::vector<InsertSpec> inserts;        ///< insertion blocks, in order
-    std::vector<ParticleSpec> particles;    ///< explicitly placed particles (inserted first)
-    Vec3 gravity = Vec3(0, 0, -9.81);       ///< gravitational acceleration (m/s^2, world)
-    double time_step = 0;                   ///< mechanical time step (s)
-    std::uint64_t seed = 1;                 ///< seed of the random stream
-    double time_step_fraction = 0.1;        ///< warn when dt > this fraction of min(Rayleigh, contact time)
-    bool allow_unsafe_time_step = false;    ///< turn the "dt above critical" error into a warning
-    double expected_speed = 0;              ///< largest impact speed for the Hertz estimate (m/s), 0 = estimate
+    std::vector<Material> materials; ///< material table
+    std::vector<PairOverride> pairs; ///< explicit pair values
+    contact::ContactModel contact;   ///< contact model
+    double skin = 0;                 ///< neighbour-list skin (m), 0 = 10 % of the largest diameter
+    bool sort_particles = true;      ///< reorder particles by cell at each list build
+    std::vector<Wall> walls;         ///< walls
+    std::vector<InsertSpec> inserts; ///< insertion blocks, in order
+    std::vector<ParticleSpec> particles; ///< explicitly placed particles (inserted first)
+    Vec3 gravity = Vec3(0, 0, -9.81);    ///< gravitational acceleration (m/s^2, world)
+    double time_step = 0;                ///< mechanical time step (s)
+    std::uint64_t seed = 1;              ///< seed of the random stream
+    double time_step_fraction =
+        0.1; ///< warn when dt > this fraction of min(Rayleigh, contact time)
+    bool allow_unsafe_time_step = false; ///< turn the "dt above critical" error into a warning
+    double expected_speed = 0; ///< largest impact speed for the Hertz estimate (m/s), 0 = estimate
 };
 
 } // namespace kiln::dynamics

@@ -62,7 +62,8 @@ void System::check_time_step() {
     }
     double speed = spec_.expected_speed;
     if (speed <= 0.0) {
-        // Fall across the whole particle cloud plus the largest initial speed (closing speed of two).
+        // Fall across the whole particle cloud plus the largest initial speed (closing speed of
+        // two).
         speed = 2.0 * vmax + std::sqrt(2.0 * spec_.gravity.norm() * (hi - lo).norm());
     }
     ts_.impact_speed = speed;
@@ -73,8 +74,9 @@ void System::check_time_step() {
             continue;
         }
         const Material& m = spec_.materials[a];
-        ts_.rayleigh = std::min(ts_.rayleigh, rayleigh_time_step(rmin[a], m.density, m.shear_modulus(),
-                                                                 m.poisson_ratio));
+        ts_.rayleigh =
+            std::min(ts_.rayleigh,
+                     rayleigh_time_step(rmin[a], m.density, m.shear_modulus(), m.poisson_ratio));
         for (std::size_t b = 0; b < rmin.size(); ++b) {
             if (!std::isfinite(rmin[b])) {
                 continue;
@@ -96,10 +98,11 @@ void System::check_time_step() {
     }
     ts_.limit = std::min(ts_.rayleigh, ts_.contact_time);
     const double dt = spec_.time_step;
-    const std::string figures = fmt::format(
-        "time step {:.3g} s; Rayleigh step {:.3g} s, shortest contact {:.3g} s (impact speed {:.3g} m/s)",
-        dt, ts_.rayleigh, ts_.contact_time, ts_.impact_speed);
-    // Fewer than 5 steps per contact, or a step above the Rayleigh step, is not a usable simulation.
+    const std::string figures = fmt::format("time step {:.3g} s; Rayleigh step {:.3g} s, shortest "
+                                            "contact {:.3g} s (impact speed {:.3g} m/s)",
+                                            dt, ts_.rayleigh, ts_.contact_time, ts_.impact_speed);
+    // Fewer than 5 steps per contact, or a step above the Rayleigh step, is not a usable
+    // simulation.
     const bool unsafe = dt > ts_.rayleigh || dt > ts_.contact_time / 5.0;
     if (unsafe && !spec_.allow_unsafe_time_step) {
         throw InputError("", 0, "simulation.time_step",
@@ -131,8 +134,8 @@ void System::rebuild_neighbours() {
 
 void System::find_wall_candidates() {
     // Particles within the skin of a wall. A particle further away cannot reach the wall before the
-    // next rebuild: it is at most skin/2 from its position at the last build, so at most a skin from
-    // where it is now.
+    // next rebuild: it is at most skin/2 from its position at the last build, so at most a skin
+    // from where it is now.
     const std::size_t nw = spec_.walls.size();
     wall_candidates_.assign(nw, {});
     for (std::size_t w = 0; w < nw; ++w) {
@@ -152,8 +155,7 @@ void System::refresh() {
     compute_forces();
 }
 
-template <class Law>
-void System::pair_forces(const Law& law) {
+template <class Law> void System::pair_forces(const Law& law) {
     const auto& nb = nl_.partners();
     const auto& owner = nl_.owners();
     auto& shear = nl_.shear();
@@ -221,23 +223,23 @@ void System::pair_forces(const Law& law) {
             p_.torque[j] += Vec3(c.tj[0][b], c.tj[1][b], c.tj[2][b]);
             shear[k] = Vec3(c.s[0][b], c.s[1][b], c.s[2][b]);
             counters_.elastic_energy += c.energy[b];
-            counters_.max_overlap_ratio = std::max(
-                counters_.max_overlap_ratio, c.overlap[b] / (2.0 * std::min(p_.radius[i], p_.radius[j])));
+            counters_.max_overlap_ratio =
+                std::max(counters_.max_overlap_ratio,
+                         c.overlap[b] / (2.0 * std::min(p_.radius[i], p_.radius[j])));
         }
     }
     counters_.particle_contacts = static_cast<long>(n_active);
 }
 
-template <class Law>
-void System::wall_forces(const Law& law) {
+template <class Law> void System::wall_forces(const Law& law) {
     const std::size_t nw = spec_.walls.size();
     const double dt = spec_.time_step;
     for (std::size_t w = 0; w < nw; ++w) {
         const Wall& wall = spec_.walls[w];
         for (const std::uint32_t i : wall_candidates_[w]) {
             const double r = p_.radius[i];
-            const WallContact wc =
-                std::visit([&](const auto& shape) { return wall_contact(shape, p_.x[i], r); }, wall.shape);
+            const WallContact wc = std::visit(
+                [&](const auto& shape) { return wall_contact(shape, p_.x[i], r); }, wall.shape);
             Vec3& shear = wall_shear_[i * nw + w];
             if (wc.overlap <= 0.0) {
                 shear.setZero();
@@ -254,12 +256,14 @@ void System::wall_forces(const Law& law) {
             c.omega_i = p_.omega[i];
             c.omega_j = Vec3::Zero();
             const PairProperties& pp = pairs_.at(p_.material[i], wall.material);
-            const contact::ContactOutput o = contact::evaluate(law, spec_.contact, pp, c, shear, dt);
+            const contact::ContactOutput o =
+                contact::evaluate(law, spec_.contact, pp, c, shear, dt);
             p_.force[i] += o.force;
             p_.torque[i] += o.torque_i;
             ++counters_.wall_contacts;
             counters_.elastic_energy += o.elastic_energy;
-            counters_.max_overlap_ratio = std::max(counters_.max_overlap_ratio, wc.overlap / (2.0 * r));
+            counters_.max_overlap_ratio =
+                std::max(counters_.max_overlap_ratio, wc.overlap / (2.0 * r));
         }
     }
 }
@@ -303,9 +307,10 @@ void System::step() {
 void System::check_finite() const {
     for (std::size_t i = 0; i < p_.size(); ++i) {
         if (!p_.x[i].allFinite() || !p_.v[i].allFinite() || !p_.omega[i].allFinite()) {
-            throw RunError(step_, fmt::format("particle {} has a non-finite position or velocity; the "
-                                              "time step is probably too large for the contact stiffness",
-                                              p_.id[i]));
+            throw RunError(step_,
+                           fmt::format("particle {} has a non-finite position or velocity; the "
+                                       "time step is probably too large for the contact stiffness",
+                                       p_.id[i]));
         }
     }
 }

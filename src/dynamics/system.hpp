@@ -14,28 +14,28 @@ namespace kiln::dynamics {
 
 /// Counters of the last force evaluation.
 struct ContactCounters {
-    long particle_contacts = 0;    ///< touching particle pairs
-    long wall_contacts = 0;        ///< touching particle-wall pairs
-    double elastic_energy = 0;     ///< energy stored in normal springs (J)
-    double max_overlap_ratio = 0;  ///< largest overlap / smaller diameter (-)
+    long particle_contacts = 0;   ///< touching particle pairs
+    long wall_contacts = 0;       ///< touching particle-wall pairs
+    double elastic_energy = 0;    ///< energy stored in normal springs (J)
+    double max_overlap_ratio = 0; ///< largest overlap / smaller diameter (-)
 };
 
 /// Energies of the system (J).
 struct Energies {
-    double kinetic = 0;     ///< sum 1/2 m v^2
-    double rotational = 0;  ///< sum 1/2 I omega^2
-    double potential = 0;   ///< sum -m g.x (zero at the world origin)
-    double elastic = 0;     ///< normal springs of all contacts
+    double kinetic = 0;    ///< sum 1/2 m v^2
+    double rotational = 0; ///< sum 1/2 I omega^2
+    double potential = 0;  ///< sum -m g.x (zero at the world origin)
+    double elastic = 0;    ///< normal springs of all contacts
     /// Sum of all four (J).
     [[nodiscard]] double total() const { return kinetic + rotational + potential + elastic; }
 };
 
 /// Critical time-step figures computed from the materials (s).
 struct TimeStepReport {
-    double rayleigh = 0;      ///< smallest Rayleigh step over the particles present (s)
-    double contact_time = 0;  ///< shortest expected contact duration (s)
-    double impact_speed = 0;  ///< speed used for the Hertz estimate (m/s)
-    double limit = 0;         ///< min(rayleigh, contact_time) (s)
+    double rayleigh = 0;     ///< smallest Rayleigh step over the particles present (s)
+    double contact_time = 0; ///< shortest expected contact duration (s)
+    double impact_speed = 0; ///< speed used for the Hertz estimate (m/s)
+    double limit = 0;        ///< min(rayleigh, contact_time) (s)
 };
 
 /// Everything that evolves during a run: enough to continue it exactly.
@@ -50,7 +50,7 @@ struct SystemState {
     long step = 0;
     std::int64_t next_id = 0;
     ContactCounters counters;
-    std::string rng;  ///< textual state of the random stream (std::mt19937_64 operator<<)
+    std::string rng; ///< textual state of the random stream (std::mt19937_64 operator<<)
 };
 
 /// Particles, walls and contacts with a velocity-Verlet integrator.
@@ -96,16 +96,15 @@ class System {
     void restore_state(SystemState s);
 
     /// Adds one particle; returns its index. The neighbour list is rebuilt at the next step.
-    std::size_t add_particle(int material, double radius, const Vec3& x, const Vec3& v, const Vec3& omega);
+    std::size_t add_particle(int material, double radius, const Vec3& x, const Vec3& v,
+                             const Vec3& omega);
 
   private:
     void insert(const InsertSpec& ins);
     void check_time_step();
     void compute_forces();
-    template <class Law>
-    void pair_forces(const Law& law);
-    template <class Law>
-    void wall_forces(const Law& law);
+    template <class Law> void pair_forces(const Law& law);
+    template <class Law> void wall_forces(const Law& law);
     void rebuild_neighbours();
     void find_wall_candidates();
 
@@ -113,9 +112,9 @@ class System {
     PairTable pairs_;
     ParticleStore p_;
     contact::NeighbourList nl_;
-    std::vector<Vec3> wall_shear_;  // [particle * n_walls + wall]
+    std::vector<Vec3> wall_shear_; // [particle * n_walls + wall]
     std::vector<std::vector<std::uint32_t>> wall_candidates_;
-    std::vector<std::uint32_t> active_;  // scratch: list entries in contact this step
+    std::vector<std::uint32_t> active_; // scratch: list entries in contact this step
     ContactCounters counters_;
     TimeStepReport ts_;
     std::vector<std::string> warnings_;

@@ -6,7 +6,8 @@
 namespace kiln::dynamics {
 
 double rayleigh_time_step(double radius, double density, double shear_modulus, double poisson) {
-    return std::numbers::pi * radius * std::sqrt(density / shear_modulus) / (0.1631 * poisson + 0.8766);
+    return std::numbers::pi * radius * std::sqrt(density / shear_modulus) /
+           (0.1631 * poisson + 0.8766);
 }
 
 double hertz_contact_time(double m_eff, double r_eff, double e_eff, double impact_speed) {

@@ -12,31 +12,31 @@ namespace kiln::dynamics {
 
 /// Infinite plane; particles live on the side the normal points to.
 struct PlaneWall {
-    Vec3 point = Vec3::Zero();         ///< a point on the plane (m, world)
-    Vec3 normal = Vec3::UnitZ();       ///< unit normal pointing into the domain (world)
+    Vec3 point = Vec3::Zero();   ///< a point on the plane (m, world)
+    Vec3 normal = Vec3::UnitZ(); ///< unit normal pointing into the domain (world)
 };
 
 /// Infinite circular cylinder; particles live inside it.
 struct CylinderWall {
-    Vec3 axis_point = Vec3::Zero();    ///< a point on the axis (m, world)
-    Vec3 axis = Vec3::UnitZ();         ///< unit axis direction (world)
-    double radius = 0;                 ///< inner radius (m)
+    Vec3 axis_point = Vec3::Zero(); ///< a point on the axis (m, world)
+    Vec3 axis = Vec3::UnitZ();      ///< unit axis direction (world)
+    double radius = 0;              ///< inner radius (m)
 };
 
 using WallShape = std::variant<PlaneWall, CylinderWall>;
 
 /// A wall of the scene.
 struct Wall {
-    std::string name;   ///< label used in output and messages
-    WallShape shape;    ///< geometry
-    int material = 0;   ///< material index
+    std::string name; ///< label used in output and messages
+    WallShape shape;  ///< geometry
+    int material = 0; ///< material index
 };
 
 /// Sphere-wall contact geometry, world frame.
 struct WallContact {
-    Vec3 n;          ///< unit normal from the wall to the sphere centre
-    double overlap;  ///< delta (m), > 0 when touching
-    double r_eff;    ///< effective radius of curvature R* (m)
+    Vec3 n;         ///< unit normal from the wall to the sphere centre
+    double overlap; ///< delta (m), > 0 when touching
+    double r_eff;   ///< effective radius of curvature R* (m)
 };
 
 /// Contact of a sphere (centre x, radius r) with a plane. Returns overlap <= 0 when apart.

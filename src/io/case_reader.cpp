@@ -51,8 +51,12 @@ std::string with_unit(double v, std::string_view unit) {
     return unit == "-" ? fmt::format("{:g}", v) : fmt::format("{:g} {}", v, unit);
 }
 
-Range positive() { return {0.0, inf, false, false}; }
-Range non_negative() { return {0.0, inf, true, false}; }
+Range positive() {
+    return {0.0, inf, false, false};
+}
+Range non_negative() {
+    return {0.0, inf, true, false};
+}
 
 /// One TOML table of the case, read with bookkeeping: every key read is recorded (unknown keys are
 /// errors in finish()) and copied, with defaults filled in, to the resolved table.
@@ -76,14 +80,16 @@ class Section {
         double v = 0.0;
         if (n == nullptr) {
             if (!def) {
-                fail(key, table_line(), fmt::format("missing required value ({}, {})", unit, r.describe()));
+                fail(key, table_line(),
+                     fmt::format("missing required value ({}, {})", unit, r.describe()));
             }
             v = *def;
         } else {
             v = as_real(key, *n, unit);
         }
         if (!r.contains(v)) {
-            fail_at(key, fmt::format("{} is out of range; allowed: {}", with_unit(v, unit), r.describe()));
+            fail_at(key, fmt::format("{} is out of range; allowed: {}", with_unit(v, unit),
+                                     r.describe()));
         }
         out_.insert_or_assign(key, v);
         return v;
@@ -136,7 +142,8 @@ class Section {
             v = *def;
         } else {
             if (!n->is_string()) {
-                fail_at(key, fmt::format("expected a string, got {}", type_name(*n)) + choices(allowed));
+                fail_at(key,
+                        fmt::format("expected a string, got {}", type_name(*n)) + choices(allowed));
             }
             v = n->as_string()->get();
         }
@@ -157,7 +164,8 @@ class Section {
         Vec3 v = Vec3::Zero();
         if (n == nullptr) {
             if (!def) {
-                fail(key, table_line(), fmt::format("missing required array of 3 numbers ({})", unit));
+                fail(key, table_line(),
+                     fmt::format("missing required array of 3 numbers ({})", unit));
             }
             v = *def;
         } else {
@@ -177,7 +185,8 @@ class Section {
     }
 
     /// A list of strings.
-    std::vector<std::string> strings(std::string_view key, std::optional<std::vector<std::string>> def,
+    std::vector<std::string> strings(std::string_view key,
+                                     std::optional<std::vector<std::string>> def,
                                      const std::vector<std::string>& allowed = {}) {
         const toml::node* n = take(key);
         std::vector<std::string> v;
@@ -221,7 +230,8 @@ class Section {
         for (const toml::node& e : *n->as_array()) {
             const double x = as_real(key, e, unit);
             if (!r.contains(x)) {
-                fail_at(key, fmt::format("{} is out of range; allowed: {}", with_unit(x, unit), r.describe()));
+                fail_at(key, fmt::format("{} is out of range; allowed: {}", with_unit(x, unit),
+                                         r.describe()));
             }
             v.push_back(x);
             arr.push_back(x);
@@ -311,8 +321,7 @@ class Section {
 };
 
 /// Iterates an array of tables ([[name]]); each element gets its own Section.
-template <class F>
-void for_each_table(Section& root, std::string_view key, F&& f) {
+template <class F> void for_each_table(Section& root, std::string_view key, F&& f) {
     const toml::node* n = root.take(key);
     if (n == nullptr) {
         return;
@@ -344,7 +353,8 @@ dynamics::SizeDistribution read_radius(Section& s) {
     dynamics::SizeDistribution d;
     const toml::node* n = s.take("radius");
     if (n == nullptr) {
-        s.fail("radius", s.table_line(), "missing required value (m): a number or a distribution table");
+        s.fail("radius", s.table_line(),
+               "missing required value (m): a number or a distribution table");
     }
     if (!n->is_table()) {
         d.kind = dynamics::SizeDistribution::Kind::constant;
@@ -353,7 +363,8 @@ dynamics::SizeDistribution read_radius(Section& s) {
     }
     toml::table out_t;
     Section r(s.file(), *n->as_table(), s.full("radius"), out_t);
-    const std::string kind = r.text("distribution", std::nullopt, {"uniform", "normal", "discrete"});
+    const std::string kind =
+        r.text("distribution", std::nullopt, {"uniform", "normal", "discrete"});
     if (kind == "uniform" || kind == "normal") {
         d.kind = kind == "uniform" ? dynamics::SizeDistribution::Kind::uniform
                                    : dynamics::SizeDistribution::Kind::normal;
@@ -390,7 +401,8 @@ dynamics::SizeDistribution read_radius(Section& s) {
 Aabb read_region(Section& s) {
     const toml::table* t = s.table("region");
     if (t == nullptr) {
-        s.fail("region", s.table_line(), "missing required table { min = [x, y, z], max = [x, y, z] } (m)");
+        s.fail("region", s.table_line(),
+               "missing required table { min = [x, y, z], max = [x, y, z] } (m)");
     }
     toml::table out_t;
     Section r(s.file(), *t, s.full("region"), out_t);
@@ -424,8 +436,10 @@ void read_walls(Section& root, CaseSpec& c, const std::map<std::string, int>& ma
             const char* axes = "xyz";
             for (int a = 0; a < 3; ++a) {
                 const Vec3 e = Vec3::Unit(a);
-                c.scene.walls.push_back({fmt::format("{}.{}min", name, axes[a]), dynamics::PlaneWall{lo, e}, mat});
-                c.scene.walls.push_back({fmt::format("{}.{}max", name, axes[a]), dynamics::PlaneWall{hi, -e}, mat});
+                c.scene.walls.push_back(
+                    {fmt::format("{}.{}min", name, axes[a]), dynamics::PlaneWall{lo, e}, mat});
+                c.scene.walls.push_back(
+                    {fmt::format("{}.{}max", name, axes[a]), dynamics::PlaneWall{hi, -e}, mat});
             }
         } else {
             dynamics::CylinderWall w;
@@ -442,7 +456,8 @@ void read_inserts(Section& root, CaseSpec& c, const std::map<std::string, int>& 
     for_each_table(root, "insert", [&](Section& s, std::size_t) {
         dynamics::InsertSpec ins;
         const std::string type = s.text("type", std::nullopt, {"random", "lattice"});
-        ins.kind = type == "random" ? dynamics::InsertSpec::Kind::random : dynamics::InsertSpec::Kind::lattice;
+        ins.kind = type == "random" ? dynamics::InsertSpec::Kind::random
+                                    : dynamics::InsertSpec::Kind::lattice;
         ins.material = material_index(s, "material", mats);
         ins.region = read_region(s);
         ins.size = read_radius(s);
@@ -452,9 +467,10 @@ void read_inserts(Section& root, CaseSpec& c, const std::map<std::string, int>& 
             ins.count = s.integer("count", 0, 0, 100'000'000);
             ins.spacing = s.real("spacing", 0.0, non_negative(), "m");
             if (ins.spacing > 0.0 && ins.spacing < 2.0 * ins.size.largest()) {
-                s.fail_at("spacing", fmt::format("{:g} m would overlap particles of radius {:g} m; "
-                                                 "allowed: 0 (automatic) or >= {:g}",
-                                                 ins.spacing, ins.size.largest(), 2.0 * ins.size.largest()));
+                s.fail_at("spacing",
+                          fmt::format("{:g} m would overlap particles of radius {:g} m; "
+                                      "allowed: 0 (automatic) or >= {:g}",
+                                      ins.spacing, ins.size.largest(), 2.0 * ins.size.largest()));
             }
         }
         ins.velocity = s.vec3("velocity", Vec3::Zero(), "m/s");
@@ -498,8 +514,10 @@ CaseSpec read_case_text(const std::string& text, const std::string& name) {
         c.scene.time_step = s.real("time_step", std::nullopt, positive(), "s");
         c.run.end_time = s.real("end_time", std::nullopt, positive(), "s");
         c.scene.gravity = s.vec3("gravity", Vec3(0, 0, -9.81), "m/s^2");
-        c.scene.seed = static_cast<std::uint64_t>(s.integer("seed", 1, 0, std::numeric_limits<long>::max()));
-        c.scene.time_step_fraction = s.real("time_step_fraction", 0.1, Range{0, 1, false, true}, "-");
+        c.scene.seed =
+            static_cast<std::uint64_t>(s.integer("seed", 1, 0, std::numeric_limits<long>::max()));
+        c.scene.time_step_fraction =
+            s.real("time_step_fraction", 0.1, Range{0, 1, false, true}, "-");
         c.scene.allow_unsafe_time_step = s.boolean("allow_unsafe_time_step", false);
         c.scene.expected_speed = s.real("expected_impact_speed", 0.0, non_negative(), "m/s");
         if (c.run.end_time < c.scene.time_step) {
@@ -516,10 +534,12 @@ CaseSpec read_case_text(const std::string& text, const std::string& name) {
         Material m;
         m.name = s.text("name", std::nullopt);
         if (mats.count(m.name) != 0) {
-            s.fail_at("name", fmt::format("material \"{}\" is defined twice; names must be unique", m.name));
+            s.fail_at("name", fmt::format("material \"{}\" is defined twice; names must be unique",
+                                          m.name));
         }
         m.youngs_modulus = s.real("youngs_modulus", std::nullopt, positive(), "Pa");
-        m.poisson_ratio = s.real("poisson_ratio", std::nullopt, Range{-1.0, 0.5, false, false}, "-");
+        m.poisson_ratio =
+            s.real("poisson_ratio", std::nullopt, Range{-1.0, 0.5, false, false}, "-");
         m.density = s.real("density", std::nullopt, positive(), "kg/m^3");
         m.restitution = s.real("restitution", std::nullopt, Range{0.0, 1.0, false, true}, "-");
         m.friction = s.real("friction", 0.0, non_negative(), "-");
@@ -542,11 +562,13 @@ CaseSpec read_case_text(const std::string& text, const std::string& name) {
         if (model == "linear") {
             contact::LinearSpringDashpot lin;
             lin.stiffness = s.real("stiffness", std::nullopt, positive(), "N/m");
-            lin.tangential_ratio = s.real("tangential_stiffness_ratio", 2.0 / 7.0, Range{0, 10, false, true}, "-");
+            lin.tangential_ratio =
+                s.real("tangential_stiffness_ratio", 2.0 / 7.0, Range{0, 10, false, true}, "-");
             c.scene.contact.law = lin;
         } else if (s.has("stiffness") || s.has("tangential_stiffness_ratio")) {
             s.fail_at(s.has("stiffness") ? "stiffness" : "tangential_stiffness_ratio",
-                      "only used by model = \"linear\"; Hertz-Mindlin takes its stiffness from the materials");
+                      "only used by model = \"linear\"; Hertz-Mindlin takes its stiffness from the "
+                      "materials");
         }
         const std::string rolling = s.text("rolling", "none", {"none", "constant_torque"});
         c.scene.contact.rolling = rolling == "none" ? contact::RollingModel::none
@@ -618,10 +640,11 @@ CaseSpec read_case_text(const std::string& text, const std::string& name) {
         const double T = c.run.end_time;
         c.output.vtk_interval = s.real("vtk_interval", T / 50.0, non_negative(), "s");
         c.output.monitor_interval = s.real("monitor_interval", T / 200.0, positive(), "s");
-        c.output.monitors = s.strings("monitors",
-                                      std::vector<std::string>{"time", "kinetic_energy", "rotational_energy",
-                                                               "contacts", "coordination", "max_overlap_ratio"},
-                                      monitor_names());
+        c.output.monitors =
+            s.strings("monitors",
+                      std::vector<std::string>{"time", "kinetic_energy", "rotational_energy",
+                                               "contacts", "coordination", "max_overlap_ratio"},
+                      monitor_names());
         c.output.checkpoint_interval = s.real("checkpoint_interval", 0.0, non_negative(), "s");
         c.output.progress = s.boolean("progress", true);
         s.finish();

@@ -1,7 +1,7 @@
 #pragma once
-// Reads a TOML case file into a CaseSpec. Strict: unknown keys, wrong types, missing required values
-// and out-of-range values are InputErrors reading "file:line: key: what is wrong, what is allowed".
-// The key list with units and defaults is docs/case-format.md.
+// Reads a TOML case file into a CaseSpec. Strict: unknown keys, wrong types, missing required
+// values and out-of-range values are InputErrors reading "file:line: key: what is wrong, what is
+// allowed". The key list with units and defaults is docs/case-format.md.
 
 #include "io/case_spec.hpp"
 

@@ -13,17 +13,17 @@ namespace kiln::io {
 /// total_energy, contacts, wall_contacts, coordination, max_overlap_ratio, max_velocity,
 /// mean_height, max_height, neighbour_builds.
 struct OutputSpec {
-    double vtk_interval = 0;          ///< simulated time between VTK particle files (s), 0 = none
-    double monitor_interval = 0;      ///< simulated time between monitor rows (s)
+    double vtk_interval = 0;           ///< simulated time between VTK particle files (s), 0 = none
+    double monitor_interval = 0;       ///< simulated time between monitor rows (s)
     std::vector<std::string> monitors; ///< monitor columns
-    double checkpoint_interval = 0;   ///< simulated time between checkpoints (s), 0 = none
-    bool progress = true;             ///< progress line on stderr (only when it is a terminal)
+    double checkpoint_interval = 0;    ///< simulated time between checkpoints (s), 0 = none
+    bool progress = true;              ///< progress line on stderr (only when it is a terminal)
 };
 
 /// Run control.
 struct RunSpec {
-    double end_time = 0;   ///< simulated end time (s)
-    std::string name;      ///< case name, for output and messages
+    double end_time = 0; ///< simulated end time (s)
+    std::string name;    ///< case name, for output and messages
 };
 
 /// The complete, validated case.

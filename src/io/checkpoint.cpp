@@ -16,13 +16,11 @@ constexpr char magic[8] = {'K', 'I', 'L', 'N', 'C', 'K', 'P', '1'};
 class Out {
   public:
     explicit Out(std::ofstream& f) : f_(f) {}
-    template <class T>
-    void pod(const T& v) {
+    template <class T> void pod(const T& v) {
         static_assert(std::is_trivially_copyable_v<T>);
         f_.write(reinterpret_cast<const char*>(&v), sizeof(T));
     }
-    template <class T>
-    void vec(const std::vector<T>& v) {
+    template <class T> void vec(const std::vector<T>& v) {
         pod(static_cast<std::uint64_t>(v.size()));
         if constexpr (std::is_same_v<T, Vec3>) {
             for (const Vec3& x : v) {
@@ -30,7 +28,8 @@ class Out {
             }
         } else {
             static_assert(std::is_trivially_copyable_v<T>);
-            f_.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(T)));
+            f_.write(reinterpret_cast<const char*>(v.data()),
+                     static_cast<std::streamsize>(v.size() * sizeof(T)));
         }
     }
     void str(const std::string& s) {
@@ -45,13 +44,11 @@ class Out {
 class In {
   public:
     In(std::ifstream& f, std::string name) : f_(f), name_(std::move(name)) {}
-    template <class T>
-    void pod(T& v) {
+    template <class T> void pod(T& v) {
         f_.read(reinterpret_cast<char*>(&v), sizeof(T));
         check();
     }
-    template <class T>
-    void vec(std::vector<T>& v) {
+    template <class T> void vec(std::vector<T>& v) {
         std::uint64_t n = 0;
         pod(n);
         if (n > (std::uint64_t{1} << 40)) {
@@ -88,8 +85,7 @@ class In {
     std::string name_;
 };
 
-template <class IO, class State, class Store>
-void fields(IO& io, State& s, Store& p) {
+template <class IO, class State, class Store> void fields(IO& io, State& s, Store& p) {
     io.vec(p.id);
     io.vec(p.material);
     io.vec(p.radius);

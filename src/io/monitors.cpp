@@ -60,22 +60,38 @@ class Sampler {
     double value(Monitor m) {
         const auto& c = sys_.counters();
         switch (m) {
-        case Monitor::time: return sys_.time();
-        case Monitor::step: return static_cast<double>(sys_.step_count());
-        case Monitor::kinetic_energy: return energies().kinetic;
-        case Monitor::rotational_energy: return energies().rotational;
-        case Monitor::potential_energy: return energies().potential;
-        case Monitor::elastic_energy: return energies().elastic;
-        case Monitor::total_energy: return energies().total();
-        case Monitor::contacts: return static_cast<double>(c.particle_contacts);
-        case Monitor::wall_contacts: return static_cast<double>(c.wall_contacts);
-        case Monitor::coordination: return coordination();
-        case Monitor::max_overlap_ratio: return c.max_overlap_ratio;
-        case Monitor::max_velocity: return max_velocity();
-        case Monitor::mean_height: return heights().mean;
-        case Monitor::max_height: return heights().max;
-        case Monitor::neighbour_builds: return static_cast<double>(sys_.neighbour_builds());
-        case Monitor::count: break;
+        case Monitor::time:
+            return sys_.time();
+        case Monitor::step:
+            return static_cast<double>(sys_.step_count());
+        case Monitor::kinetic_energy:
+            return energies().kinetic;
+        case Monitor::rotational_energy:
+            return energies().rotational;
+        case Monitor::potential_energy:
+            return energies().potential;
+        case Monitor::elastic_energy:
+            return energies().elastic;
+        case Monitor::total_energy:
+            return energies().total();
+        case Monitor::contacts:
+            return static_cast<double>(c.particle_contacts);
+        case Monitor::wall_contacts:
+            return static_cast<double>(c.wall_contacts);
+        case Monitor::coordination:
+            return coordination();
+        case Monitor::max_overlap_ratio:
+            return c.max_overlap_ratio;
+        case Monitor::max_velocity:
+            return max_velocity();
+        case Monitor::mean_height:
+            return heights().mean;
+        case Monitor::max_height:
+            return heights().max;
+        case Monitor::neighbour_builds:
+            return static_cast<double>(sys_.neighbour_builds());
+        case Monitor::count:
+            break;
         }
         KILN_ASSERT(false);
         return std::numeric_limits<double>::quiet_NaN();

@@ -34,7 +34,8 @@ std::string hms(double seconds) {
 } // namespace
 
 Progress::Progress(double end_time, bool enabled)
-    : end_time_(end_time), enabled_(enabled && isatty(STDERR_FILENO) == 1) {}
+    : end_time_(end_time), enabled_(enabled && isatty(STDERR_FILENO) == 1) {
+}
 
 Progress::~Progress() {
     finish();

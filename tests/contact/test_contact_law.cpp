@@ -33,7 +33,8 @@ TEST(HertzMindlin, StaticNormalForceIsHertz) {
     Vec3 shear = Vec3::Zero();
     const ContactInput c = head_on(1e-5, 0.0);
     const ContactOutput o = evaluate(HertzMindlin{}, ContactModel{}, p, c, shear, 1e-6);
-    const double hertz = 4.0 / 3.0 * p.effective_modulus * std::sqrt(c.r_eff) * std::pow(c.overlap, 1.5);
+    const double hertz =
+        4.0 / 3.0 * p.effective_modulus * std::sqrt(c.r_eff) * std::pow(c.overlap, 1.5);
     EXPECT_NEAR(o.normal_force / hertz, 1.0, rounding);
     EXPECT_NEAR(o.elastic_energy / (0.4 * hertz * c.overlap), 1.0, rounding);
     EXPECT_NEAR(o.force.z(), o.normal_force, rounding * hertz);
@@ -43,17 +44,22 @@ TEST(HertzMindlin, DampingOpposesApproachAndClampForbidsPull) {
     const PairProperties p = pair(0.3, 0.0);
     Vec3 shear = Vec3::Zero();
     ContactModel model;
-    const double approach = evaluate(HertzMindlin{}, model, p, head_on(1e-6, -1.0), shear, 1e-6).normal_force;
-    const double elastic = evaluate(HertzMindlin{}, model, p, head_on(1e-6, 0.0), shear, 1e-6).normal_force;
-    const double leave = evaluate(HertzMindlin{}, model, p, head_on(1e-6, 50.0), shear, 1e-6).normal_force;
+    const double approach =
+        evaluate(HertzMindlin{}, model, p, head_on(1e-6, -1.0), shear, 1e-6).normal_force;
+    const double elastic =
+        evaluate(HertzMindlin{}, model, p, head_on(1e-6, 0.0), shear, 1e-6).normal_force;
+    const double leave =
+        evaluate(HertzMindlin{}, model, p, head_on(1e-6, 50.0), shear, 1e-6).normal_force;
     EXPECT_GT(approach, elastic);
     EXPECT_EQ(leave, 0.0);
     model.clamp_normal_force = false;
-    EXPECT_LT(evaluate(HertzMindlin{}, model, p, head_on(1e-6, 50.0), shear, 1e-6).normal_force, 0.0);
+    EXPECT_LT(evaluate(HertzMindlin{}, model, p, head_on(1e-6, 50.0), shear, 1e-6).normal_force,
+              0.0);
 }
 
 TEST(LinearSpringDashpot, DampingGivesExactRestitutionRatio) {
-    // gamma = -2 beta sqrt(m k) is critical damping times -beta; e = exp(-zeta pi / sqrt(1 - zeta^2)).
+    // gamma = -2 beta sqrt(m k) is critical damping times -beta; e = exp(-zeta pi / sqrt(1 -
+    // zeta^2)).
     const PairProperties p = pair(0.4, 0.0);
     const LinearSpringDashpot law{1e5, 2.0 / 7.0};
     Vec3 shear = Vec3::Zero();
@@ -85,8 +91,8 @@ TEST(Tangential, TorqueSpinsBodiesToReduceSlip) {
     c.v_rel = Vec3(1.0, 0.0, 0.0); // i above j (n = +z) moves in +x
     Vec3 shear = Vec3::Zero();
     const ContactOutput o = evaluate(HertzMindlin{}, ContactModel{}, p, c, shear, 1e-6);
-    // Friction on i acts at r = -l z with F = -f x: torque_i = l f (z x x) = +l f y, which turns the
-    // bottom of i towards -x. On j, F = +f x at +l z: torque_j = +l f y as well.
+    // Friction on i acts at r = -l z with F = -f x: torque_i = l f (z x x) = +l f y, which turns
+    // the bottom of i towards -x. On j, F = +f x at +l z: torque_j = +l f y as well.
     EXPECT_GT(o.torque_i.y(), 0.0);
     EXPECT_GT(o.torque_j.y(), 0.0);
 }

@@ -86,7 +86,8 @@ TEST(NeighbourList, HistoryFollowsPairsThroughSortingAndRoleSwaps) {
     std::map<IdPair, Vec3> tag;
     for (std::size_t i = 0; i < p.size(); ++i) {
         for (auto k = nl.offsets()[i]; k < nl.offsets()[i + 1]; ++k) {
-            const Vec3 v(static_cast<double>(p.id[i]), static_cast<double>(p.id[nl.partners()[k]]), 1.0);
+            const Vec3 v(static_cast<double>(p.id[i]), static_cast<double>(p.id[nl.partners()[k]]),
+                         1.0);
             nl.shear()[k] = v;
             tag[{p.id[i], p.id[nl.partners()[k]]}] = v;
         }

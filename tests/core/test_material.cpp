@@ -1,14 +1,18 @@
 #include "core/material.hpp"
 
 #include <cmath>
-#include <numbers>
 #include <gtest/gtest.h>
+#include <numbers>
 
 namespace kiln {
 namespace {
 
-Material glass() { return {"glass", 60e9, 0.23, 2540, 0.95, 0.4, 0.0}; }
-Material steel() { return {"steel", 210e9, 0.3, 7800, 0.8, 0.2, 0.01}; }
+Material glass() {
+    return {"glass", 60e9, 0.23, 2540, 0.95, 0.4, 0.0};
+}
+Material steel() {
+    return {"steel", 210e9, 0.3, 7800, 0.8, 0.2, 0.01};
+}
 
 TEST(PairTable, EffectiveModuliFollowHertzAndDiRenzo) {
     const PairTable t({glass(), steel()}, {});

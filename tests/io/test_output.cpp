@@ -119,10 +119,14 @@ class JsonChecker {
             return false;
         }
         switch (t_[i_]) {
-        case '{': return members('}', true);
-        case '[': return members(']', false);
-        case '"': return string();
-        default: return literal("true") || literal("false") || literal("null") || number();
+        case '{':
+            return members('}', true);
+        case '[':
+            return members(']', false);
+        case '"':
+            return string();
+        default:
+            return literal("true") || literal("false") || literal("null") || number();
         }
     }
     bool members(char close, bool object) {

@@ -152,7 +152,9 @@ const std::vector<Row>& sweep() {
     return rows;
 }
 
-std::string label(const char* what, double e) { return fmt::format("{} e={:.2f}", what, e); }
+std::string label(const char* what, double e) {
+    return fmt::format("{} e={:.2f}", what, e);
+}
 
 TEST(Restitution, LinearWithoutClampIsExact) {
     for (const Row& r : sweep()) {

@@ -105,8 +105,12 @@ struct Sweep {
 };
 
 /// Rigid-body spin omega_hat and contact velocity psi2 for impact angle psi1.
-double rigid_omega_hat(double psi1) { return psi1 >= 7.0 ? 5.0 : 5.0 * psi1 / 7.0; }
-double rigid_psi2(double psi1) { return psi1 >= 7.0 ? psi1 - 7.0 : 0.0; }
+double rigid_omega_hat(double psi1) {
+    return psi1 >= 7.0 ? 5.0 : 5.0 * psi1 / 7.0;
+}
+double rigid_psi2(double psi1) {
+    return psi1 >= 7.0 ? psi1 - 7.0 : 0.0;
+}
 
 /// Runs the psi1 sweep with pair restitution e and appends its rows to `csv`.
 Sweep run_sweep(const io::CaseSpec& spec, double e, std::ofstream& csv) {

@@ -27,8 +27,8 @@ inline void record(const std::string& quantity, double measured, double referenc
     }
     f.precision(10);
     f << quantity << ',' << measured << ',' << reference << ',' << tolerance << ',' << unit << '\n';
-    std::printf("  %-40s measured %.6g, reference %.6g %s (tolerance %.3g)\n", quantity.c_str(), measured,
-                reference, unit.c_str(), tolerance);
+    std::printf("  %-40s measured %.6g, reference %.6g %s (tolerance %.3g)\n", quantity.c_str(),
+                measured, reference, unit.c_str(), tolerance);
 }
 
 /// Removes results.csv of this case (call once at the start of a check).
