@@ -12,12 +12,35 @@
 
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <fmt/format.h>
 #include <memory>
 
 namespace kiln::app {
 
 namespace {
+
+/// Set by SIGINT/SIGTERM; the run loop stops cleanly at the next step.
+volatile std::sig_atomic_t stop_requested = 0;
+
+extern "C" void request_stop(int) {
+    stop_requested = 1;
+}
+
+/// Installs the stop handlers for the lifetime of a run and restores the defaults afterwards.
+struct StopHandlers {
+    StopHandlers() {
+        stop_requested = 0;
+        std::signal(SIGINT, request_stop);
+        std::signal(SIGTERM, request_stop);
+    }
+    ~StopHandlers() {
+        std::signal(SIGINT, SIG_DFL);
+        std::signal(SIGTERM, SIG_DFL);
+    }
+    StopHandlers(const StopHandlers&) = delete;
+    StopHandlers& operator=(const StopHandlers&) = delete;
+};
 
 /// Steps between events of period `interval` (s); 0 when the event is off.
 long every(double interval, double dt) {
@@ -91,8 +114,14 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
     monitors.write(*sys);
     const auto t0 = std::chrono::steady_clock::now();
     int code = 0;
+    const StopHandlers handlers;
+    bool interrupted = false;
     try {
         while (sys->step_count() < total) {
+            if (stop_requested != 0) {
+                interrupted = true;
+                break;
+            }
             sys->step();
             const long s = sys->step_count();
             if (s % finite_check_every == 0) {
@@ -114,6 +143,16 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
         summary.status = std::string("failed: ") + e.what();
         code = 3;
         vtk.write(*sys);
+    }
+    if (interrupted) {
+        // Nothing is lost: the state at the last step goes to a checkpoint the run can resume from.
+        summary.status = fmt::format("interrupted at t = {:.6g} s; resume with --restart {}",
+                                     sys->time(), (opt.out_dir / "checkpoint.bin").string());
+        code = 130;
+        io::write_checkpoint(opt.out_dir / "checkpoint.bin", sys->save_state());
+        if (vtk_every > 0) {
+            vtk.write(*sys);
+        }
     }
     progress.finish();
     const double wall =

@@ -15,7 +15,8 @@ struct RunOptions {
 };
 
 /// Runs the case; returns the process exit code (0 = completed). Input errors propagate as
-/// InputError; a numerical failure is recorded in summary.json and returns 3.
+/// InputError; a numerical failure is recorded in summary.json and returns 3; SIGINT or SIGTERM
+/// stops the run after the current step, writes a checkpoint and returns 130.
 int run_case(const io::CaseSpec& spec, const RunOptions& opt);
 
 } // namespace kiln::app
