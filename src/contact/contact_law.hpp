@@ -47,6 +47,10 @@ struct ContactModel {
     ContactLaw law = HertzMindlin{};           ///< normal and tangential law
     RollingModel rolling = RollingModel::none; ///< rolling resistance model
     bool clamp_normal_force = true;            ///< forbid attractive (negative) normal force
+    /// True: e is the rebound ratio of a normal binary impact (the damping is tuned for the clamp);
+    /// false: the damping is built from e directly (the LIGGGHTS convention), which gives the
+    /// rebound ratio e only without the clamp.
+    bool rebound_restitution = true;
 };
 
 /// Geometry and kinematics of one contact, world frame. Index i is the body receiving `force`.

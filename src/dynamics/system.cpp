@@ -13,7 +13,9 @@
 namespace kiln::dynamics {
 
 System::System(const SceneSpec& spec)
-    : spec_(spec), pairs_(spec.materials, spec.pairs), nl_(spec.skin), rng_(spec.seed) {
+    : spec_(spec), pairs_(spec.materials, spec.pairs,
+                          spec.contact.clamp_normal_force && spec.contact.rebound_restitution),
+      nl_(spec.skin), rng_(spec.seed) {
     if (spec_.skin <= 0.0) {
         double rmax = 0.0;
         for (const auto& ps : spec_.particles) {

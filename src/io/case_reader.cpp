@@ -574,6 +574,8 @@ CaseSpec read_case_text(const std::string& text, const std::string& name) {
         c.scene.contact.rolling = rolling == "none" ? contact::RollingModel::none
                                                     : contact::RollingModel::constant_torque;
         c.scene.contact.clamp_normal_force = s.boolean("clamp_normal_force", true);
+        c.scene.contact.rebound_restitution =
+            s.text("restitution_meaning", "rebound", {"rebound", "dashpot"}) == "rebound";
         c.scene.skin = s.real("skin", 0.0, non_negative(), "m");
         c.scene.sort_particles = s.boolean("sort_particles", true);
         s.finish({"stiffness", "tangential_stiffness_ratio"});

@@ -1,5 +1,7 @@
 #include "core/material.hpp"
 
+#include "core/error.hpp"
+
 #include <cmath>
 #include <gtest/gtest.h>
 #include <numbers>
@@ -49,6 +51,40 @@ TEST(DampingBeta, MatchesDefinitionAndLimits) {
     const double l = std::log(0.5);
     EXPECT_DOUBLE_EQ(damping_beta(0.5), l / std::sqrt(l * l + std::numbers::pi * std::numbers::pi));
     EXPECT_LT(damping_beta(0.1), damping_beta(0.9));
+}
+
+} // namespace
+} // namespace kiln
+
+namespace kiln {
+namespace {
+
+TEST(ClampedRebound, InversionRoundTrips) {
+    constexpr double bisection = 1e-12; // bisection runs to rounding of e'
+    for (const double e : {0.15, 0.2, 0.3, 0.5, 0.8, 0.95, 0.999}) {
+        const double ep = damping_restitution_for_clamped(e);
+        EXPECT_LT(ep, e) << "a clamped contact loses less energy than its dashpot's e'";
+        EXPECT_NEAR(clamped_rebound(ep), e, bisection) << e;
+    }
+    EXPECT_DOUBLE_EQ(damping_restitution_for_clamped(1.0), 1.0);
+}
+
+TEST(ClampedRebound, BelowTheLowestIsRefused) {
+    const double low = lowest_clamped_rebound();
+    EXPECT_GT(low, 0.13);
+    EXPECT_LT(low, 0.15);
+    EXPECT_TRUE(std::isnan(damping_restitution_for_clamped(0.5 * low)));
+    const Material m{"m", 1e7, 0.3, 2500, 0.1, 0.0, 0.0};
+    EXPECT_THROW(PairTable({m}, {}, true), InputError);
+    EXPECT_NO_THROW(PairTable({m}, {}, false));
+}
+
+TEST(ClampedRebound, TableTunesDampingOnlyWhenAsked) {
+    const Material m{"m", 1e7, 0.3, 2500, 0.5, 0.0, 0.0};
+    EXPECT_DOUBLE_EQ(PairTable({m}, {}, false).at(0, 0).beta, damping_beta(0.5));
+    const PairProperties tuned = PairTable({m}, {}, true).at(0, 0);
+    EXPECT_DOUBLE_EQ(tuned.restitution, 0.5);
+    EXPECT_NEAR(clamped_rebound(tuned.damping_restitution), 0.5, 1e-12);
 }
 
 } // namespace

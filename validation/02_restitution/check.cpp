@@ -11,6 +11,7 @@
 // - clamp, either law: e_c = e^(1 - (2/pi) asin|beta|), the contact ending where the force
 //   vanishes (derived in README.md).
 
+#include "core/error.hpp"
 #include "dynamics/system.hpp"
 #include "validation.hpp"
 
@@ -88,10 +89,11 @@ Impact run_impact(const dynamics::SceneSpec& scene, double end_time) {
 
 /// What one impact of the sweep changes in the loaded scene.
 struct Config {
-    bool hertz = false; ///< Hertz-Mindlin instead of the loaded linear law
-    bool clamp = false; ///< clamp_normal_force
-    double e = 1.0;     ///< restitution of the material (-)
-    double speed = 1.0; ///< closing speed (m/s)
+    bool hertz = false;   ///< Hertz-Mindlin instead of the loaded linear law
+    bool clamp = false;   ///< clamp_normal_force
+    double e = 1.0;       ///< restitution of the material (-)
+    double speed = 1.0;   ///< closing speed (m/s)
+    bool rebound = false; ///< restitution_meaning = "rebound" (damping tuned for the clamp)
 };
 
 /// The loaded scene changed as `c` says.
@@ -104,6 +106,9 @@ dynamics::SceneSpec variant(const dynamics::SceneSpec& base, const Config& c) {
         s.contact.law = contact::HertzMindlin{};
     }
     s.contact.clamp_normal_force = c.clamp;
+    // The sweep studies the dashpot built from e itself (LIGGGHTS' convention); the default
+    // "rebound" meaning is checked by ReboundMeaningGivesExactlyE below.
+    s.contact.rebound_restitution = c.rebound;
     const double v0 = (s.particles.at(0).v - s.particles.at(1).v).norm();
     for (dynamics::ParticleSpec& p : s.particles) {
         p.v *= c.speed / v0;
@@ -206,6 +211,32 @@ TEST(Restitution, ElasticLimitIsExactForBothLaws) {
                                        std::pair{"hertz_clamped_10ms", r.hertz_clamped_fast}}) {
         record(label(name, 1.0) + " elastic", impact.ratio, 1.0, elastic_tolerance, "-");
         EXPECT_NEAR(impact.ratio, 1.0, elastic_tolerance) << name;
+    }
+}
+
+} // namespace
+} // namespace kiln::validation
+
+namespace kiln::validation {
+namespace {
+
+TEST(Restitution, ReboundMeaningGivesExactlyEWithClamp) {
+    // restitution_meaning = "rebound" (the default) tunes the damping from e' with
+    // e'^(1 - (2/pi) asin|beta(e')|) = e, so a clamped contact rebounds with e itself.
+    const io::CaseSpec spec = load_case();
+    for (const double e : restitutions) {
+        for (const bool hertz : {false, true}) {
+            const dynamics::SceneSpec s = variant(spec.scene, {hertz, true, e, slow, true});
+            if (e < lowest_clamped_rebound()) {
+                EXPECT_THROW(dynamics::System{s}, InputError) << "e = " << e;
+                continue;
+            }
+            const double tol = hertz ? hertz_tolerance : linear_tolerance;
+            const double ratio = run_impact(s, spec.run.end_time).ratio;
+            record(label(hertz ? "hertz_clamped_rebound" : "linear_clamped_rebound", e), ratio, e,
+                   tol, "-");
+            EXPECT_NEAR(ratio, e, tol) << (hertz ? "hertz" : "linear") << ", e = " << e;
+        }
     }
 }
 

@@ -124,8 +124,9 @@ Sweep run_sweep(const io::CaseSpec& spec, double e, std::ofstream& csv) {
     const PairTable pairs(base.materials, base.pairs);
     const PairProperties& pp = pairs.at(p0.material, base.walls.at(0).material);
     s.e = pp.restitution;
-    s.e_ref =
-        base.contact.clamp_normal_force ? clamped_restitution(pp.restitution) : pp.restitution;
+    s.e_ref = (base.contact.clamp_normal_force && !base.contact.rebound_restitution)
+                  ? clamped_restitution(pp.restitution)
+                  : pp.restitution;
     s.mu = pp.friction;
     s.radius = p0.radius;
     s.vn = -p0.v.dot(n);
