@@ -48,11 +48,6 @@ constexpr std::array<double, 26> psi1_sweep{0.25, 0.5, 0.75, 1.0,  1.5,  2.0,  2
 /// Rigid-body threshold of gross sliding, psi1 = 2 tan(theta) / (mu (1 + e)) >= 7 (-).
 constexpr double psi1_sliding = 7.0;
 
-/// Restitution when the contact ends where the clamped normal force vanishes (validation 02) (-).
-double clamped_restitution(double e) {
-    return std::pow(e, 1.0 - 2.0 / std::numbers::pi * std::asin(std::abs(damping_beta(e))));
-}
-
 /// Velocities of the sphere after one impact (world frame).
 struct Rebound {
     Vec3 v = Vec3::Zero();     ///< velocity after the impact (m/s)
@@ -125,7 +120,7 @@ Sweep run_sweep(const io::CaseSpec& spec, double e, std::ofstream& csv) {
     const PairProperties& pp = pairs.at(p0.material, base.walls.at(0).material);
     s.e = pp.restitution;
     s.e_ref = (base.contact.clamp_normal_force && !base.contact.rebound_restitution)
-                  ? clamped_restitution(pp.restitution)
+                  ? clamped_rebound(pp.restitution)
                   : pp.restitution;
     s.mu = pp.friction;
     s.radius = p0.radius;
