@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
+#include <functional>
 #include <numeric>
 #include <unordered_map>
 
@@ -144,12 +145,20 @@ void System::insert(const InsertSpec& ins) {
     for (std::size_t i = 0; i < p_.size(); ++i) {
         grid.add(p_.x[i], p_.radius[i]);
     }
+    // The radii are drawn first, once per particle, and placed largest first: drawing a new radius
+    // for every rejected position would favour small particles (they fit more often) and skew the
+    // size distribution, the more so the fuller the region.
+    std::vector<double> radii(static_cast<std::size_t>(std::max(0L, ins.count)));
+    for (double& r : radii) {
+        r = ins.size.sample(rng_);
+    }
+    std::stable_sort(radii.begin(), radii.end(), std::greater<>());
     const long max_attempts = 1000 * std::max(1L, ins.count) + 100000;
     long attempts = 0;
     long placed = 0;
     while (placed < ins.count && attempts < max_attempts) {
         ++attempts;
-        const double r = ins.size.sample(rng_);
+        const double r = radii[static_cast<std::size_t>(placed)];
         Vec3 c;
         for (int k = 0; k < 3; ++k) {
             const double lo = reg.lo[k] + r;

@@ -84,6 +84,29 @@ TEST(System, RandomInsertionPlacesNonOverlappingParticlesInRegion) {
     }
 }
 
+TEST(System, RandomInsertionKeepsTheSizeDistributionAtHighFill) {
+    // A uniform distribution on [0.5, 1.5] mm has mean 1 mm and standard deviation 0.289 mm. At a
+    // solid fraction near 0.3 small particles fit far more often than large ones, so any
+    // re-drawing of radii on rejection shows as a low mean.
+    SceneSpec s = base_scene();
+    InsertSpec ins;
+    ins.region = {Vec3(0, 0, 0), Vec3(0.03, 0.03, 0.03)};
+    ins.count = 1400; // solid fraction 1400 * (4/3) pi <r^3> / V = 0.30 with <r^3> = 1.25e-9 m^3
+    ins.size.kind = SizeDistribution::Kind::uniform;
+    ins.size.min = 0.5e-3;
+    ins.size.max = 1.5e-3;
+    s.inserts.push_back(ins);
+    const System sys(s);
+    const ParticleStore& p = sys.particles();
+    ASSERT_EQ(p.size(), 1400U);
+    double mean = 0.0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        mean += p.radius[i] / static_cast<double>(p.size());
+    }
+    constexpr double sampling = 4.0 * 0.289e-3 / 37.4; // four standard errors of a 1400-sample mean
+    EXPECT_NEAR(mean, 1.0e-3, sampling);
+}
+
 TEST(System, InsertionThatCannotFitIsAnInputError) {
     SceneSpec s = base_scene();
     InsertSpec ins;
