@@ -89,11 +89,18 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
                    ts.rayleigh, ts.contact_time, dt / ts.limit);
     }
 
+    // A restart into the folder of the run it continues extends that run's series and monitor
+    // rows from the checkpoint on; into a fresh folder it starts them at the checkpoint.
+    const bool restarting = !opt.restart.empty();
     io::ParticleSeriesWriter vtk(opt.out_dir);
+    const std::size_t frames_kept = restarting ? vtk.resume(sys->time()) : 0;
     if (!spec.scene.walls.empty()) {
         vtk.write_walls(spec.scene, opt.out_dir / "walls.vtp");
     }
-    io::MonitorWriter monitors(opt.out_dir / "monitors.csv", spec.output.monitors);
+    io::MonitorWriter monitors =
+        restarting ? io::MonitorWriter(opt.out_dir / "monitors.csv", spec.output.monitors,
+                                       io::ResumePoint{sys->time(), sys->step_count(), mon_every})
+                   : io::MonitorWriter(opt.out_dir / "monitors.csv", spec.output.monitors);
     io::Progress progress(spec.run.end_time, spec.output.progress && !opt.quiet);
 
     io::RunSummary summary;
@@ -108,10 +115,18 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
     summary.status = "completed";
 
     const long first = sys->step_count();
-    if (vtk_every > 0) {
+    if (vtk_every > 0 && frames_kept == 0) {
         vtk.write(*sys);
     }
-    monitors.write(*sys);
+    if (monitors.rows() == 0) {
+        monitors.write(*sys);
+    }
+    if (restarting && !opt.quiet) {
+        fmt::print("  continuing from {} at t = {:.6g} s (step {}); kept {} frames and {} monitor "
+                   "rows\n",
+                   opt.restart.string(), sys->time(), sys->step_count(), frames_kept,
+                   monitors.rows());
+    }
     const auto t0 = std::chrono::steady_clock::now();
     int code = 0;
     const StopHandlers handlers;

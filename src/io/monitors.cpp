@@ -5,8 +5,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <fstream>
 #include <limits>
 #include <utility>
 
@@ -202,6 +204,73 @@ MonitorWriter::MonitorWriter(std::filesystem::path csv, std::vector<std::string>
     put(fmt::format("{}\n", fmt::join(names_, ",")));
 }
 
+MonitorWriter::MonitorWriter(std::filesystem::path csv, std::vector<std::string> names,
+                             const ResumePoint& at)
+    : file_(std::move(csv)), names_(std::move(names)) {
+    columns_.reserve(names_.size());
+    for (const auto& n : names_) {
+        columns_.push_back(monitor_index(n));
+    }
+    if (names_.empty()) {
+        return;
+    }
+    std::vector<std::string> kept;
+    if (std::filesystem::exists(file_)) {
+        std::ifstream in(file_);
+        std::string line;
+        if (!in || !std::getline(in, line)) {
+            throw InputError(file_.string(), 1, "", "cannot read the monitor file to continue it");
+        }
+        const std::string header = fmt::format("{}", fmt::join(names_, ","));
+        if (line != header) {
+            throw InputError(file_.string(), 1, "",
+                             fmt::format("columns '{}' differ from the case's monitors '{}'; "
+                                         "restart into a fresh --out folder",
+                                         line, header));
+        }
+        const auto col = [&](const char* name) {
+            const auto it = std::find(names_.begin(), names_.end(), name);
+            return it == names_.end() ? -1 : static_cast<int>(it - names_.begin());
+        };
+        const int time_col = col("time");
+        const int step_col = col("step");
+        // Rows are printed with 10 significant digits: compare times with that resolution.
+        const double time_limit = at.time * (1.0 + 1e-9) + 1e-300;
+        const long count_limit = at.row_every > 0 ? at.step / at.row_every + 1 : 0;
+        while (std::getline(in, line)) {
+            bool keep = false;
+            if (time_col >= 0 || step_col >= 0) {
+                std::size_t start = 0;
+                const int c = time_col >= 0 ? time_col : step_col;
+                for (int k = 0; k < c && start != std::string::npos; ++k) {
+                    start = line.find(',', start);
+                    start = start == std::string::npos ? start : start + 1;
+                }
+                const double v = start == std::string::npos
+                                     ? HUGE_VAL
+                                     : std::strtod(line.c_str() + start, nullptr);
+                keep = time_col >= 0 ? v <= time_limit : v <= static_cast<double>(at.step);
+            } else {
+                keep = static_cast<long>(kept.size()) < count_limit;
+            }
+            if (!keep) {
+                break;
+            }
+            kept.push_back(line);
+        }
+    }
+    out_.reset(std::fopen(file_.c_str(), "w"));
+    if (!out_) {
+        throw InputError(file_.string(), 0, "", "cannot create the monitor file");
+    }
+    std::string text = fmt::format("{}\n", fmt::join(names_, ","));
+    for (const auto& row : kept) {
+        text += row + "\n";
+    }
+    put(text);
+    rows_ = static_cast<long>(kept.size());
+}
+
 void MonitorWriter::write(const dynamics::System& sys) {
     Sampler s(sys);
     last_row_.resize(columns_.size());
@@ -210,6 +279,7 @@ void MonitorWriter::write(const dynamics::System& sys) {
     }
     if (out_) {
         put(fmt::format("{:.10g}\n", fmt::join(last_row_, ",")));
+        ++rows_;
     }
 }
 

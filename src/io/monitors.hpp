@@ -13,6 +13,14 @@
 
 namespace kiln::io {
 
+/// Where a restarted run picks up its output: the checkpoint's simulated time (s) and step, and
+/// the steps between monitor rows of the run being continued.
+struct ResumePoint {
+    double time = 0;    ///< simulated time of the checkpoint (s)
+    long step = 0;      ///< step count of the checkpoint (-)
+    long row_every = 0; ///< steps between monitor rows (-); 0 when monitors are off
+};
+
 /// Value of monitor `name` for `sys`, SI units: energies (J), heights (m, along -gravity, or z
 /// when gravity is zero), max_velocity (m/s), counts and ratios (-), time (s). Heights are NaN for
 /// an empty system. Throws InputError for a name not in monitor_names().
@@ -26,11 +34,21 @@ class MonitorWriter {
     /// Throws InputError for an unknown name or when the file cannot be written.
     MonitorWriter(std::filesystem::path csv, std::vector<std::string> names);
 
+    /// Continues an existing `csv` after a restart at `at`: keeps the header and the rows up to the
+    /// checkpoint (by the `time` column, else the `step` column, else by counting rows of
+    /// `at.row_every` steps from step 0), drops the rows the interrupted run wrote after it and
+    /// appends from there. Starts a new file when `csv` does not exist. Throws InputError when
+    /// the existing columns differ from `names` or the file cannot be read or written.
+    MonitorWriter(std::filesystem::path csv, std::vector<std::string> names, const ResumePoint& at);
+
     /// Appends one row of the monitors of `sys`; throws InputError when the file cannot be written.
     void write(const dynamics::System& sys);
 
     /// Values of the last row written, in column order (SI units, see monitor_value).
     [[nodiscard]] const std::vector<double>& last_row() const { return last_row_; }
+
+    /// Data rows in the file (kept from an earlier run plus written by this one).
+    [[nodiscard]] long rows() const { return rows_; }
 
     /// Column names, in order.
     [[nodiscard]] const std::vector<std::string>& names() const { return names_; }
@@ -48,6 +66,7 @@ class MonitorWriter {
     std::vector<int> columns_; // monitor of each column, index into monitor_names()
     std::unique_ptr<std::FILE, Closer> out_;
     std::vector<double> last_row_;
+    long rows_ = 0;
 };
 
 } // namespace kiln::io

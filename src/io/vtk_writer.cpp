@@ -21,7 +21,9 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstdlib>
 #include <fmt/format.h>
+#include <fstream>
 #include <limits>
 #include <numbers>
 #include <system_error>
@@ -224,6 +226,44 @@ void ParticleSeriesWriter::write(const dynamics::System& sys) {
     write_polydata(pd, dir_ / name);
     frames_.push_back({sys.time(), name});
     write_collection();
+}
+
+std::size_t ParticleSeriesWriter::resume(double time) {
+    frames_.clear();
+    const std::filesystem::path file = dir_ / "particles.pvd";
+    if (!std::filesystem::exists(file)) {
+        return 0;
+    }
+    std::ifstream in(file);
+    if (!in) {
+        throw InputError(file.string(), 0, "", "cannot read the series to continue it");
+    }
+    // The collection was written by write_collection(): one DataSet element per line.
+    const double time_limit = time * (1.0 + 1e-12) + 1e-300;
+    std::string line;
+    int line_no = 0;
+    while (std::getline(in, line)) {
+        ++line_no;
+        const auto t = line.find("timestep=\"");
+        const auto f = line.find("file=\"");
+        if (t == std::string::npos || f == std::string::npos) {
+            continue;
+        }
+        const double frame_time = std::strtod(line.c_str() + t + 10, nullptr);
+        const auto end = line.find('"', f + 6);
+        if (end == std::string::npos) {
+            throw InputError(file.string(), line_no, "", "malformed DataSet element");
+        }
+        Frame frame{frame_time, line.substr(f + 6, end - f - 6)};
+        if (frame.time <= time_limit) {
+            frames_.push_back(std::move(frame));
+        } else {
+            std::error_code ec; // a frame file already gone is not an error
+            std::filesystem::remove(dir_ / frame.file, ec);
+        }
+    }
+    write_collection();
+    return frames_.size();
 }
 
 void ParticleSeriesWriter::write_collection() const {

@@ -18,6 +18,13 @@ class ParticleSeriesWriter {
     /// Creates out_dir/particles/; throws InputError when it cannot.
     explicit ParticleSeriesWriter(std::filesystem::path out_dir);
 
+    /// Continues the series in this folder after a restart at simulated time `time` (s): keeps the
+    /// frames of particles.pvd up to `time`, deletes the files of later frames (written by the
+    /// interrupted run after its checkpoint) and numbers new frames after the kept ones. Returns
+    /// the number of frames kept (0 when there is no series yet). Throws InputError when an
+    /// existing particles.pvd cannot be read.
+    std::size_t resume(double time);
+
     /// Writes the particles of `sys` as the next frame (positions in m, world frame; SI fields)
     /// and rewrites particles.pvd atomically. Throws InputError when a file cannot be written.
     void write(const dynamics::System& sys);

@@ -20,6 +20,22 @@ rows=$(($(wc -l < "$out/run/monitors.csv") - 1))
 "$kiln" run "$here/tiny.toml" --restart "$out/run/checkpoint.bin" --out "$out/restart" --quiet
 grep -q '"status": "completed"' "$out/restart/summary.json" || { echo "restart did not complete"; exit 1; }
 
+# A restart into the folder of the run it continues extends that run's output: stop at 0.01 s,
+# run on past the checkpoint to 0.015 s (those rows and frames must be dropped), restart from the
+# 0.01 s checkpoint to the end, and the monitors must equal the straight run's byte for byte.
+sed 's/^end_time = 0.02/end_time = 0.01/' "$here/tiny.toml" > "$out/half.toml"
+sed 's/^end_time = 0.02/end_time = 0.015/' "$here/tiny.toml" > "$out/more.toml"
+"$kiln" run "$out/half.toml" --out "$out/cont" --quiet
+cp "$out/cont/checkpoint.bin" "$out/at10ms.bin"
+"$kiln" run "$out/more.toml" --restart "$out/cont/checkpoint.bin" --out "$out/cont" --quiet
+"$kiln" run "$here/tiny.toml" --restart "$out/at10ms.bin" --out "$out/cont" --quiet
+cmp "$out/run/monitors.csv" "$out/cont/monitors.csv" || { echo "continued monitors differ"; exit 1; }
+frames_run=$(grep -c '<DataSet' "$out/run/particles.pvd")
+frames_cont=$(grep -c '<DataSet' "$out/cont/particles.pvd")
+[ "$frames_run" -eq "$frames_cont" ] || { echo "frames: $frames_cont continued, $frames_run straight"; exit 1; }
+cmp "$out/run/particles/particles_000002.vtp" "$out/cont/particles/particles_000002.vtp" \
+    || { echo "last frame differs"; exit 1; }
+
 set +e
 msg=$("$kiln" check "$here/bad.toml" 2>&1)
 code=$?
