@@ -189,23 +189,16 @@ void MonitorWriter::Closer::operator()(std::FILE* f) const {
 }
 
 MonitorWriter::MonitorWriter(std::filesystem::path csv, std::vector<std::string> names)
-    : file_(std::move(csv)), names_(std::move(names)) {
-    columns_.reserve(names_.size());
-    for (const auto& n : names_) {
-        columns_.push_back(monitor_index(n));
-    }
-    if (names_.empty()) {
-        return;
-    }
-    out_.reset(std::fopen(file_.c_str(), "w"));
-    if (!out_) {
-        throw InputError(file_.string(), 0, "", "cannot create the monitor file");
-    }
-    put(fmt::format("{}\n", fmt::join(names_, ",")));
+    : MonitorWriter(std::move(csv), std::move(names), nullptr) {
 }
 
 MonitorWriter::MonitorWriter(std::filesystem::path csv, std::vector<std::string> names,
                              const ResumePoint& at)
+    : MonitorWriter(std::move(csv), std::move(names), &at) {
+}
+
+MonitorWriter::MonitorWriter(std::filesystem::path csv, std::vector<std::string> names,
+                             const ResumePoint* at)
     : file_(std::move(csv)), names_(std::move(names)) {
     columns_.reserve(names_.size());
     for (const auto& n : names_) {
@@ -214,51 +207,8 @@ MonitorWriter::MonitorWriter(std::filesystem::path csv, std::vector<std::string>
     if (names_.empty()) {
         return;
     }
-    std::vector<std::string> kept;
-    if (std::filesystem::exists(file_)) {
-        std::ifstream in(file_);
-        std::string line;
-        if (!in || !std::getline(in, line)) {
-            throw InputError(file_.string(), 1, "", "cannot read the monitor file to continue it");
-        }
-        const std::string header = fmt::format("{}", fmt::join(names_, ","));
-        if (line != header) {
-            throw InputError(file_.string(), 1, "",
-                             fmt::format("columns '{}' differ from the case's monitors '{}'; "
-                                         "restart into a fresh --out folder",
-                                         line, header));
-        }
-        const auto col = [&](const char* name) {
-            const auto it = std::find(names_.begin(), names_.end(), name);
-            return it == names_.end() ? -1 : static_cast<int>(it - names_.begin());
-        };
-        const int time_col = col("time");
-        const int step_col = col("step");
-        // Rows are printed with 10 significant digits: compare times with that resolution.
-        const double time_limit = at.time * (1.0 + 1e-9) + 1e-300;
-        const long count_limit = at.row_every > 0 ? at.step / at.row_every + 1 : 0;
-        while (std::getline(in, line)) {
-            bool keep = false;
-            if (time_col >= 0 || step_col >= 0) {
-                std::size_t start = 0;
-                const int c = time_col >= 0 ? time_col : step_col;
-                for (int k = 0; k < c && start != std::string::npos; ++k) {
-                    start = line.find(',', start);
-                    start = start == std::string::npos ? start : start + 1;
-                }
-                const double v = start == std::string::npos
-                                     ? HUGE_VAL
-                                     : std::strtod(line.c_str() + start, nullptr);
-                keep = time_col >= 0 ? v <= time_limit : v <= static_cast<double>(at.step);
-            } else {
-                keep = static_cast<long>(kept.size()) < count_limit;
-            }
-            if (!keep) {
-                break;
-            }
-            kept.push_back(line);
-        }
-    }
+    const std::vector<std::string> kept =
+        at != nullptr ? kept_rows(*at) : std::vector<std::string>{};
     out_.reset(std::fopen(file_.c_str(), "w"));
     if (!out_) {
         throw InputError(file_.string(), 0, "", "cannot create the monitor file");
@@ -269,6 +219,55 @@ MonitorWriter::MonitorWriter(std::filesystem::path csv, std::vector<std::string>
     }
     put(text);
     rows_ = static_cast<long>(kept.size());
+}
+
+std::vector<std::string> MonitorWriter::kept_rows(const ResumePoint& at) const {
+    std::vector<std::string> kept;
+    if (!std::filesystem::exists(file_)) {
+        return kept;
+    }
+    std::ifstream in(file_);
+    std::string line;
+    if (!in || !std::getline(in, line)) {
+        throw InputError(file_.string(), 1, "", "cannot read the monitor file to continue it");
+    }
+    const std::string header = fmt::format("{}", fmt::join(names_, ","));
+    if (line != header) {
+        throw InputError(file_.string(), 1, "",
+                         fmt::format("columns '{}' differ from the case's monitors '{}'; "
+                                     "restart into a fresh --out folder",
+                                     line, header));
+    }
+    const auto col = [&](const char* name) {
+        const auto it = std::find(names_.begin(), names_.end(), name);
+        return it == names_.end() ? -1 : static_cast<int>(it - names_.begin());
+    };
+    const int time_col = col("time");
+    const int step_col = col("step");
+    // Rows are printed with 10 significant digits: compare times with that resolution.
+    const double time_limit = at.time * (1.0 + 1e-9) + 1e-300;
+    const long count_limit = at.row_every > 0 ? at.step / at.row_every + 1 : 0;
+    while (std::getline(in, line)) {
+        bool keep = false;
+        if (time_col >= 0 || step_col >= 0) {
+            std::size_t start = 0;
+            const int c = time_col >= 0 ? time_col : step_col;
+            for (int k = 0; k < c && start != std::string::npos; ++k) {
+                start = line.find(',', start);
+                start = start == std::string::npos ? start : start + 1;
+            }
+            const double v =
+                start == std::string::npos ? HUGE_VAL : std::strtod(line.c_str() + start, nullptr);
+            keep = time_col >= 0 ? v <= time_limit : v <= static_cast<double>(at.step);
+        } else {
+            keep = static_cast<long>(kept.size()) < count_limit;
+        }
+        if (!keep) {
+            break;
+        }
+        kept.push_back(line);
+    }
+    return kept;
 }
 
 void MonitorWriter::write(const dynamics::System& sys) {

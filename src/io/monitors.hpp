@@ -54,6 +54,12 @@ class MonitorWriter {
     [[nodiscard]] const std::vector<std::string>& names() const { return names_; }
 
   private:
+    /// Shared constructor: `at` is null for a new file.
+    MonitorWriter(std::filesystem::path csv, std::vector<std::string> names, const ResumePoint* at);
+
+    /// Rows of the existing file to keep when continuing at `at` (see the resuming constructor).
+    [[nodiscard]] std::vector<std::string> kept_rows(const ResumePoint& at) const;
+
     /// Closes the CSV file.
     struct Closer {
         void operator()(std::FILE* f) const;
