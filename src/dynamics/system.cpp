@@ -178,40 +178,58 @@ template <class Law> void System::pair_forces(const Law& law) {
         shear[k] *= touch ? 1.0 : 0.0;
     }
 
-    // Pass 2: forces of the touching pairs, in blocks: gather, evaluate (vectorised, the contacts
-    // of a block are independent), scatter.
+    // Pass 2: forces of the touching pairs, in blocks. The scalar gather only copies particle data;
+    // the geometry (square root, divisions) is derived in the vectorised loop together with the
+    // law, since the contacts of a block are independent; then the results are scattered.
     constexpr std::size_t block = 16;
     const double fn_floor = contact::floor_of(spec_.contact);
     const double rolling = contact::rolling_of(spec_.contact);
     contact::ContactBlock<block> c; // on the stack, so the vectoriser sees it does not alias
+    double d[3][block], ri[block], rj[block], mi[block], mj[block], ratio[block];
+    const bool one_pair = pairs_.size() == 1;
+    if (one_pair) {
+        for (std::size_t b = 0; b < block; ++b) {
+            c.set_pair(b, pairs_.at(0, 0));
+        }
+    }
+    double energy = 0.0;
+    double max_ratio = 0.0;
     for (std::size_t a0 = 0; a0 < n_active; a0 += block) {
         const std::size_t m = std::min(block, n_active - a0);
         for (std::size_t b = 0; b < m; ++b) {
             const std::uint32_t k = active_[a0 + b];
             const std::uint32_t i = owner[k];
             const std::uint32_t j = nb[k];
-            const double ri = p_.radius[i];
-            const double rj = p_.radius[j];
-            const Vec3 d = p_.x[i] - p_.x[j];
-            const double rsum = ri + rj;
-            const double dist = d.norm();
-            const double overlap = rsum - dist;
             for (int q = 0; q < 3; ++q) {
-                c.n[q][b] = d[q] / dist;
+                d[q][b] = p_.x[i][q] - p_.x[j][q];
                 c.v[q][b] = p_.v[i][q] - p_.v[j][q];
                 c.wi[q][b] = p_.omega[i][q];
                 c.wj[q][b] = p_.omega[j][q];
                 c.s[q][b] = shear[k][q];
             }
-            c.overlap[b] = overlap;
-            c.r_eff[b] = ri * rj / rsum;
-            c.m_eff[b] = p_.mass[i] * p_.mass[j] / (p_.mass[i] + p_.mass[j]);
-            c.lever_i[b] = ri - 0.5 * overlap;
-            c.lever_j[b] = rj - 0.5 * overlap;
-            c.set_pair(b, pairs_.at(p_.material[i], p_.material[j]));
+            ri[b] = p_.radius[i];
+            rj[b] = p_.radius[j];
+            mi[b] = p_.mass[i];
+            mj[b] = p_.mass[j];
+            if (!one_pair) {
+                c.set_pair(b, pairs_.at(p_.material[i], p_.material[j]));
+            }
         }
 #pragma omp simd
         for (std::size_t b = 0; b < m; ++b) {
+            const double rsum = ri[b] + rj[b];
+            const double dist =
+                std::sqrt(d[0][b] * d[0][b] + d[1][b] * d[1][b] + d[2][b] * d[2][b]);
+            const double overlap = rsum - dist;
+            for (int q = 0; q < 3; ++q) {
+                c.n[q][b] = d[q][b] / dist;
+            }
+            c.overlap[b] = overlap;
+            c.r_eff[b] = ri[b] * rj[b] / rsum;
+            c.m_eff[b] = mi[b] * mj[b] / (mi[b] + mj[b]);
+            c.lever_i[b] = ri[b] - 0.5 * overlap;
+            c.lever_j[b] = rj[b] - 0.5 * overlap;
+            ratio[b] = overlap / (2.0 * std::min(ri[b], rj[b]));
             contact::evaluate_block(law, fn_floor, rolling, c, b, dt);
         }
         for (std::size_t b = 0; b < m; ++b) {
@@ -224,12 +242,12 @@ template <class Law> void System::pair_forces(const Law& law) {
             p_.torque[i] += Vec3(c.ti[0][b], c.ti[1][b], c.ti[2][b]);
             p_.torque[j] += Vec3(c.tj[0][b], c.tj[1][b], c.tj[2][b]);
             shear[k] = Vec3(c.s[0][b], c.s[1][b], c.s[2][b]);
-            counters_.elastic_energy += c.energy[b];
-            counters_.max_overlap_ratio =
-                std::max(counters_.max_overlap_ratio,
-                         c.overlap[b] / (2.0 * std::min(p_.radius[i], p_.radius[j])));
+            energy += c.energy[b];
+            max_ratio = std::max(max_ratio, ratio[b]);
         }
     }
+    counters_.elastic_energy += energy;
+    counters_.max_overlap_ratio = std::max(counters_.max_overlap_ratio, max_ratio);
     counters_.particle_contacts = static_cast<long>(n_active);
 }
 
