@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <fmt/format.h>
 #include <limits>
 #include <sstream>
@@ -21,10 +22,16 @@ System::System(const SceneSpec& spec)
     : spec_(spec), pairs_(spec.materials, spec.pairs,
                           spec.contact.clamp_normal_force && spec.contact.rebound_restitution),
       nl_(spec.skin), rng_(spec.seed) {
-#ifdef _OPENMP
-    threads_ = spec_.threads > 0 ? spec_.threads : omp_get_max_threads();
-#else
+    // One thread unless asked for more: on a shared host idle-spinning OpenMP threads waiting for a
+    // descheduled partner cost far more than they gain.
     threads_ = 1;
+#ifdef _OPENMP
+    const char* env = std::getenv("OMP_NUM_THREADS");
+    if (spec_.threads > 0) {
+        threads_ = spec_.threads;
+    } else if (env != nullptr && *env != '\0') {
+        threads_ = omp_get_max_threads();
+    }
 #endif
     if (spec_.skin <= 0.0) {
         double rmax = 0.0;

@@ -85,7 +85,7 @@ class System {
     [[nodiscard]] const TimeStepReport& time_step_report() const { return ts_; }
     /// The scene this system was built from.
     [[nodiscard]] const SceneSpec& spec() const { return spec_; }
-    /// Threads used by the step loop (from `SceneSpec::threads`, else the OpenMP default).
+    /// Threads used by the step loop (`SceneSpec::threads`, else OMP_NUM_THREADS, else 1).
     [[nodiscard]] int threads() const { return threads_; }
     /// Number of neighbour-list builds so far.
     [[nodiscard]] long neighbour_builds() const { return nl_.builds(); }
