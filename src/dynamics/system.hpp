@@ -117,7 +117,7 @@ class System {
     void sum_pair_results(std::size_t i);
     template <class Law>
     void wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTotals& t);
-    void half_kick(std::size_t i);
+    void half_kick(std::size_t p0, std::size_t p1);
     void rebuild_neighbours();
     void index_partners();
     void find_wall_candidates();
