@@ -446,9 +446,16 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
 void System::half_kick(std::size_t p0, std::size_t p1) {
     const double h = 0.5 * spec_.time_step;
     const Vec3 g = spec_.gravity;
+    // Local pointers: the compiler reloaded each array's address at every particle otherwise.
+    Vec3* __restrict v = p_.v.data();
+    Vec3* __restrict w = p_.omega.data();
+    const Vec3* __restrict f = p_.force.data();
+    const Vec3* __restrict t = p_.torque.data();
+    const double* __restrict inv_m = p_.inv_mass.data();
+    const double* __restrict inv_i = p_.inv_inertia.data();
     for (std::size_t i = p0; i < p1; ++i) {
-        p_.v[i] += h * (p_.force[i] * p_.inv_mass[i] + g);
-        p_.omega[i] += h * p_.inv_inertia[i] * p_.torque[i];
+        v[i] += h * (f[i] * inv_m[i] + g);
+        w[i] += h * inv_i[i] * t[i];
     }
 }
 
