@@ -215,11 +215,19 @@ inline void keep_or_clear(Vec3& v, bool keep) {
 // order of every sum do not depend on the number of threads.
 template <class Law, bool direct>
 void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, ChunkTotals& t) {
-    const auto& nb = nl_.partners();
-    const auto& owner = nl_.owners();
-    auto& shear = nl_.shear();
+    // Local pointers, as the compiler would otherwise reload each array's address per contact.
+    const std::uint32_t* __restrict nb = nl_.partners().data();
+    const std::uint32_t* __restrict owner = nl_.owners().data();
+    Vec3* __restrict shear = nl_.shear().data();
+    const Vec3* __restrict x = p_.x.data();
+    const Vec3* __restrict vel = p_.v.data();
+    const Vec3* __restrict omega = p_.omega.data();
+    const double* __restrict radius = p_.radius.data();
+    const double* __restrict mass = p_.mass.data();
+    Vec3* __restrict force = p_.force.data();
+    Vec3* __restrict torque = p_.torque.data();
     const double dt = spec_.time_step;
-    const auto zero_row = static_cast<std::uint32_t>(nb.size());
+    const auto zero_row = static_cast<std::uint32_t>(nl_.partners().size());
 
     // Which entries touch. Branch-free, so the ~50 % unpredictable outcome costs nothing;
     // histories of pairs apart are cleared.
@@ -228,8 +236,8 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
     for (std::size_t k = begin; k < end; ++k) {
         const std::uint32_t i = owner[k];
         const std::uint32_t j = nb[k];
-        const double rsum = p_.radius[i] + p_.radius[j];
-        const bool touch = (p_.x[i] - p_.x[j]).squaredNorm() < rsum * rsum;
+        const double rsum = radius[i] + radius[j];
+        const bool touch = (x[i] - x[j]).squaredNorm() < rsum * rsum;
         active[n_active] = static_cast<std::uint32_t>(k);
         n_active += touch ? 1U : 0U;
         keep_or_clear(shear[k], touch);
@@ -261,16 +269,16 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
             const std::uint32_t i = owner[k];
             const std::uint32_t j = nb[k];
             for (int q = 0; q < 3; ++q) {
-                d[q][b] = p_.x[i][q] - p_.x[j][q];
-                c.v[q][b] = p_.v[i][q] - p_.v[j][q];
-                c.wi[q][b] = p_.omega[i][q];
-                c.wj[q][b] = p_.omega[j][q];
+                d[q][b] = x[i][q] - x[j][q];
+                c.v[q][b] = vel[i][q] - vel[j][q];
+                c.wi[q][b] = omega[i][q];
+                c.wj[q][b] = omega[j][q];
                 c.s[q][b] = shear[k][q];
             }
-            ri[b] = p_.radius[i];
-            rj[b] = p_.radius[j];
-            mi[b] = p_.mass[i];
-            mj[b] = p_.mass[j];
+            ri[b] = radius[i];
+            rj[b] = radius[j];
+            mi[b] = mass[i];
+            mj[b] = mass[j];
             if (!one_pair) {
                 c.set_pair(b, pairs_.at(p_.material[i], p_.material[j]));
             }
@@ -298,10 +306,10 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
                 const std::uint32_t i = owner[k];
                 const std::uint32_t j = nb[k];
                 const Vec3 f(c.f[0][b], c.f[1][b], c.f[2][b]);
-                p_.force[i] += f;
-                p_.force[j] -= f;
-                p_.torque[i] += Vec3(c.ti[0][b], c.ti[1][b], c.ti[2][b]);
-                p_.torque[j] += Vec3(c.tj[0][b], c.tj[1][b], c.tj[2][b]);
+                force[i] += f;
+                force[j] -= f;
+                torque[i] += Vec3(c.ti[0][b], c.ti[1][b], c.ti[2][b]);
+                torque[j] += Vec3(c.tj[0][b], c.tj[1][b], c.tj[2][b]);
             } else {
                 double* r = &pair_result_[row * k];
                 for (int q = 0; q < 3; ++q) {
