@@ -148,6 +148,10 @@ std::vector<std::uint32_t> NeighbourList::build(ParticleStore& p, bool sort) {
         return false;
     };
 
+    // When the store is sorted by cell, particle indices follow the cell order: partners j > i lie
+    // in i's own cell after i or in neighbour cells of higher index, so the other cells and the
+    // start of i's own cell are skipped (same list, in the same order, for half the distance
+    // tests).
     offsets_.resize(n + 1);
     offsets_[0] = 0;
     for (std::size_t i = 0; i < n; ++i) {
@@ -156,11 +160,17 @@ std::vector<std::uint32_t> NeighbourList::build(ParticleStore& p, bool sort) {
         const long cx = coord(xi, 0, nx);
         const long cy = coord(xi, 1, ny);
         const long cz = coord(xi, 2, nz);
+        const std::size_t own = cell_of_[i];
         for (long z = std::max(0L, cz - 1); z <= std::min(nz - 1, cz + 1); ++z) {
             for (long y = std::max(0L, cy - 1); y <= std::min(ny - 1, cy + 1); ++y) {
                 for (long x = std::max(0L, cx - 1); x <= std::min(nx - 1, cx + 1); ++x) {
                     const std::size_t c = static_cast<std::size_t>((z * ny + y) * nx + x);
-                    for (std::uint32_t k = cell_start_[c]; k < cell_start_[c + 1]; ++k) {
+                    if (sort && c < own) {
+                        continue;
+                    }
+                    const std::uint32_t first =
+                        sort && c == own ? static_cast<std::uint32_t>(i + 1) : cell_start_[c];
+                    for (std::uint32_t k = first; k < cell_start_[c + 1]; ++k) {
                         const std::uint32_t j = order_[k];
                         if (j <= i) {
                             continue;
