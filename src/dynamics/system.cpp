@@ -45,6 +45,7 @@ System::System(const SceneSpec& spec)
         spec_.skin = 0.2 * rmax; // 10 % of the largest diameter
         nl_ = contact::NeighbourList(spec_.skin);
     }
+    nl_.set_threads(threads_);
     for (const auto& ps : spec_.particles) {
         add_particle(ps.material, ps.radius, ps.x, ps.v, ps.omega);
     }
