@@ -240,11 +240,12 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
         const double rsum = radius[i] + radius[j];
         const bool touch = (x[i] - x[j]).squaredNorm() < rsum * rsum;
         active[n_active] = static_cast<std::uint32_t>(k);
+        if constexpr (!direct) {
+            // Rows of a chunk are its touching entries in order, from the chunk's first row.
+            result_row_[k] = touch ? static_cast<std::uint32_t>(begin + n_active) : zero_row;
+        }
         n_active += touch ? 1U : 0U;
         keep_or_clear(shear[k], touch);
-        if constexpr (!direct) {
-            result_row_[k] = touch ? static_cast<std::uint32_t>(k) : zero_row;
-        }
     }
 
     // Forces of the touching pairs, in blocks. The scalar gather only copies particle data; the
@@ -312,7 +313,7 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
                 torque[i] += Vec3(c.ti[0][b], c.ti[1][b], c.ti[2][b]);
                 torque[j] += Vec3(c.tj[0][b], c.tj[1][b], c.tj[2][b]);
             } else {
-                double* r = &pair_result_[row * k];
+                double* r = &pair_result_[row * (begin + a0 + b)];
                 for (int q = 0; q < 3; ++q) {
                     r[q] = c.f[q][b];
                     r[3 + q] = c.ti[q][b];
