@@ -251,7 +251,7 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
     // Forces of the touching pairs, in blocks. The scalar gather only copies particle data; the
     // geometry (square root, divisions) is derived in the vectorised loop together with the law,
     // since the contacts of a block are independent; then the results are scattered (one thread)
-    // or stored by entry (several threads).
+    // or stored in the chunk's rows (several threads).
     const double fn_floor = contact::floor_of(spec_.contact);
     const double rolling = contact::rolling_of(spec_.contact);
     contact::ContactBlock<block> c; // on the stack, so the vectoriser sees it does not alias

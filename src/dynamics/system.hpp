@@ -129,9 +129,10 @@ class System {
     std::vector<Vec3> wall_shear_; // [particle * n_walls + wall]
     std::vector<std::vector<std::uint32_t>> wall_candidates_;
     // With more than one thread, pair results go to rows of `pair_result_` (force, torque on i,
-    // torque on j; one row per list entry plus a zero row at the end), `result_row_` maps each
-    // entry to its row or to the zero row, and each particle sums its rows in list order through
-    // `as_partner_` (entries where it is the partner, by particle in compressed rows).
+    // torque on j; a chunk's touching entries in order from the chunk's first entry index, plus a
+    // zero row at the end), `result_row_` maps each entry to its row or to the zero row, and each
+    // particle sums its rows in list order through `as_partner_` (entries where it is the partner,
+    // by particle in compressed rows).
     std::vector<double> pair_result_;
     std::vector<std::uint32_t> result_row_;
     std::vector<std::uint32_t> as_partner_offsets_, as_partner_;
