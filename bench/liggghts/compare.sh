@@ -5,7 +5,8 @@
 #        KILN_THREADS (threads of the kiln run, default 1; LIGGGHTS always runs on one),
 #        OMP_WAIT_POLICY (passed on; set it to passive when the host is oversubscribed)
 # Prints, per N: particle-steps/s of both codes and their ratio, then kinetic energy and mean
-# coordination number at the end of both runs. Both codes run one after the other on one thread.
+# coordination number at the end of both runs. Both codes run one after the other, LIGGGHTS on one
+# thread, kiln on KILN_THREADS.
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
