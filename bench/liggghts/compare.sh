@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
 # Side-by-side benchmark of kiln against LIGGGHTS 3.8 on the scene of in.pour_spheres (this folder).
 # usage: bench/liggghts/compare.sh [N ...]          (default N = 5000; STEPS=20000 by default)
-# env:   STEPS (time steps, dt = 1e-5 s), KILN (path to the kiln binary), WORK (scratch folder)
+# env:   STEPS (time steps, dt = 1e-5 s), KILN (path to the kiln binary), WORK (scratch folder),
+#        KILN_THREADS (threads of the kiln run, default 1; LIGGGHTS always runs on one),
+#        OMP_WAIT_POLICY (passed on; set it to passive when the host is oversubscribed)
 # Prints, per N: particle-steps/s of both codes and their ratio, then kinetic energy and mean
-# coordination number at the end of both runs. Both codes run one after the other on one thread.
+# coordination number at the end of both runs. Both codes run one after the other, LIGGGHTS on one
+# thread, kiln on KILN_THREADS.
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -21,7 +24,7 @@ fi
 [ -x "$kiln" ] || { echo "compare.sh: kiln binary not found at $kiln (set KILN)" >&2; exit 1; }
 
 end_time=$(/usr/bin/python3 -c "print(repr($steps * 1e-5))")
-echo "# kiln vs LIGGGHTS 3.8, in.pour_spheres, $steps steps of 1e-5 s, 1 thread; $(date -u '+%F %T UTC')"
+echo "# kiln vs LIGGGHTS 3.8, in.pour_spheres, $steps steps of 1e-5 s; LIGGGHTS 1 thread, kiln ${KILN_THREADS:-1}; $(date -u '+%F %T UTC')"
 echo "# host: $(nproc) cores; load before: $(uptime | sed 's/.*load average: //'); work: $work"
 
 results=()
@@ -33,8 +36,8 @@ for n in "${sizes[@]}"; do
         -log log.liggghts > liggghts.out 2>&1) || { echo "LIGGGHTS failed, see $dir" >&2; exit 1; }
     sed -e "s/^count = .*/count = $n/" -e "s/^end_time = .*/end_time = $end_time/" \
         "$here/pour_spheres.toml" > "$dir/case.toml"
-    (cd "$dir" && OMP_NUM_THREADS=1 "$kiln" run case.toml --out kiln > kiln.out 2>&1) ||
-        { echo "kiln failed, see $dir" >&2; exit 1; }
+    (cd "$dir" && OMP_NUM_THREADS="${KILN_THREADS:-1}" "$kiln" run case.toml --out kiln \
+        > kiln.out 2>&1) || { echo "kiln failed, see $dir" >&2; exit 1; }
     results+=("$n:$dir")
 done
 echo "# load after: $(uptime | sed 's/.*load average: //')"

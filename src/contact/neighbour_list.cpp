@@ -4,6 +4,10 @@
 #include <cmath>
 #include <limits>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 namespace kiln::contact {
 
 namespace {
@@ -148,37 +152,77 @@ std::vector<std::uint32_t> NeighbourList::build(ParticleStore& p, bool sort) {
         return false;
     };
 
-    offsets_.resize(n + 1);
-    offsets_[0] = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-        const Vec3& xi = p.x[i];
-        const double ri = p.radius[i] + skin_;
-        const long cx = coord(xi, 0, nx);
-        const long cy = coord(xi, 1, ny);
-        const long cz = coord(xi, 2, nz);
-        for (long z = std::max(0L, cz - 1); z <= std::min(nz - 1, cz + 1); ++z) {
-            for (long y = std::max(0L, cy - 1); y <= std::min(ny - 1, cy + 1); ++y) {
-                for (long x = std::max(0L, cx - 1); x <= std::min(nx - 1, cx + 1); ++x) {
-                    const std::size_t c = static_cast<std::size_t>((z * ny + y) * nx + x);
-                    for (std::uint32_t k = cell_start_[c]; k < cell_start_[c + 1]; ++k) {
-                        const std::uint32_t j = order_[k];
-                        if (j <= i) {
+    // When the store is sorted by cell, particle indices follow the cell order: partners j > i lie
+    // in i's own cell after i or in neighbour cells of higher index, so the other cells and the
+    // start of i's own cell are skipped (same list, in the same order, for half the distance
+    // tests).
+    // Each thread searches a contiguous range of particles into its own buffer; the buffers are
+    // joined in order, so the list does not depend on the number of threads.
+    offsets_.assign(n + 1, 0);
+    if (thread_partners_.size() < static_cast<std::size_t>(threads_)) {
+        thread_partners_.resize(static_cast<std::size_t>(threads_));
+    }
+#pragma omp parallel num_threads(threads_)
+    {
+        int t = 0;
+        int nt = 1;
+#ifdef _OPENMP
+        t = omp_get_thread_num();
+        nt = omp_get_num_threads();
+#endif
+        std::vector<std::uint32_t>& buf = thread_partners_[static_cast<std::size_t>(t)];
+        buf.clear();
+        const std::size_t i0 = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(nt);
+        const std::size_t i1 = n * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(nt);
+        for (std::size_t i = i0; i < i1; ++i) {
+            const Vec3& xi = p.x[i];
+            const double ri = p.radius[i] + skin_;
+            const long cx = coord(xi, 0, nx);
+            const long cy = coord(xi, 1, ny);
+            const long cz = coord(xi, 2, nz);
+            const std::size_t own = cell_of_[i];
+            const std::size_t before = buf.size();
+            for (long z = std::max(0L, cz - 1); z <= std::min(nz - 1, cz + 1); ++z) {
+                for (long y = std::max(0L, cy - 1); y <= std::min(ny - 1, cy + 1); ++y) {
+                    for (long x = std::max(0L, cx - 1); x <= std::min(nx - 1, cx + 1); ++x) {
+                        const std::size_t c = static_cast<std::size_t>((z * ny + y) * nx + x);
+                        if (sort && c < own) {
                             continue;
                         }
-                        const double cut = ri + p.radius[j];
-                        if ((p.x[j] - xi).squaredNorm() < cut * cut) {
-                            partners_.push_back(j);
+                        const std::uint32_t first =
+                            sort && c == own ? static_cast<std::uint32_t>(i + 1) : cell_start_[c];
+                        for (std::uint32_t k = first; k < cell_start_[c + 1]; ++k) {
+                            const std::uint32_t j = order_[k];
+                            if (j <= i) {
+                                continue;
+                            }
+                            const double cut = ri + p.radius[j];
+                            if ((p.x[j] - xi).squaredNorm() < cut * cut) {
+                                buf.push_back(j);
+                            }
                         }
                     }
                 }
             }
+            offsets_[i + 1] = static_cast<std::uint32_t>(buf.size() - before);
         }
-        offsets_[i + 1] = static_cast<std::uint32_t>(partners_.size());
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+        offsets_[i + 1] += offsets_[i];
+    }
+    partners_.resize(offsets_[n]);
+    {
+        std::size_t at = 0;
+        for (const auto& buf : thread_partners_) {
+            std::copy(buf.begin(), buf.end(), partners_.begin() + static_cast<std::ptrdiff_t>(at));
+            at += buf.size();
+        }
     }
 
     // Carry the tangential history over, by particle id; flip its sign if the pair swapped roles.
     shear_.assign(partners_.size(), Vec3::Zero());
     if (have_old) {
+#pragma omp parallel for num_threads(threads_) schedule(static)
         for (std::size_t i = 0; i < n; ++i) {
             for (std::uint32_t k = offsets_[i]; k < offsets_[i + 1]; ++k) {
                 const std::int64_t a = p.id[i];

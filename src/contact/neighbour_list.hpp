@@ -36,6 +36,8 @@ class NeighbourList {
     [[nodiscard]] const std::vector<Vec3>& shear() const { return shear_; }
     /// Skin distance (m).
     [[nodiscard]] double skin() const { return skin_; }
+    /// Threads used by `build` (the list is the same for any number).
+    void set_threads(int threads) { threads_ = threads > 0 ? threads : 1; }
     /// Number of builds so far.
     [[nodiscard]] long builds() const { return builds_; }
 
@@ -48,6 +50,7 @@ class NeighbourList {
 
   private:
     double skin_;
+    int threads_ = 1;
     long builds_ = 0;
     std::vector<std::uint32_t> offsets_{0};
     std::vector<std::uint32_t> partners_;
@@ -58,6 +61,7 @@ class NeighbourList {
     // Scratch reused between builds.
     std::vector<std::uint32_t> cell_of_, cell_start_, order_, old_row_of_id_;
     std::vector<std::int64_t> old_ids_;
+    std::vector<std::vector<std::uint32_t>> thread_partners_;
 };
 
 } // namespace kiln::contact

@@ -60,8 +60,9 @@ struct SceneSpec {
     contact::ContactModel contact;   ///< contact model
     double skin = 0;                 ///< neighbour-list skin (m), 0 = 10 % of the largest diameter
     bool sort_particles = true;      ///< reorder particles by cell at each list build
-    std::vector<Wall> walls;         ///< walls
-    std::vector<InsertSpec> inserts; ///< insertion blocks, in order
+    int threads = 0;         ///< threads of the step loop; 0 = the OpenMP default (OMP_NUM_THREADS)
+    std::vector<Wall> walls; ///< walls
+    std::vector<InsertSpec> inserts;     ///< insertion blocks, in order
     std::vector<ParticleSpec> particles; ///< explicitly placed particles (inserted first)
     Vec3 gravity = Vec3(0, 0, -9.81);    ///< gravitational acceleration (m/s^2, world)
     double time_step = 0;                ///< mechanical time step (s)

@@ -5,10 +5,17 @@
 #include "dynamics/time_step.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdlib>
 #include <fmt/format.h>
 #include <limits>
 #include <sstream>
+#include <type_traits>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 namespace kiln::dynamics {
 
@@ -16,6 +23,17 @@ System::System(const SceneSpec& spec)
     : spec_(spec), pairs_(spec.materials, spec.pairs,
                           spec.contact.clamp_normal_force && spec.contact.rebound_restitution),
       nl_(spec.skin), rng_(spec.seed) {
+    // One thread unless asked for more: on a shared host idle-spinning OpenMP threads waiting for a
+    // descheduled partner cost far more than they gain.
+    threads_ = 1;
+#ifdef _OPENMP
+    const char* env = std::getenv("OMP_NUM_THREADS");
+    if (spec_.threads > 0) {
+        threads_ = spec_.threads;
+    } else if (env != nullptr && *env != '\0') {
+        threads_ = omp_get_max_threads();
+    }
+#endif
     if (spec_.skin <= 0.0) {
         double rmax = 0.0;
         for (const auto& ps : spec_.particles) {
@@ -27,6 +45,7 @@ System::System(const SceneSpec& spec)
         spec_.skin = 0.2 * rmax; // 10 % of the largest diameter
         nl_ = contact::NeighbourList(spec_.skin);
     }
+    nl_.set_threads(threads_);
     for (const auto& ps : spec_.particles) {
         add_particle(ps.material, ps.radius, ps.x, ps.v, ps.omega);
     }
@@ -130,8 +149,26 @@ void System::rebuild_neighbours() {
         }
         wall_shear_.swap(s);
     }
+    index_partners();
     find_wall_candidates();
     list_valid_ = true;
+}
+
+void System::index_partners() {
+    // For each particle, the list entries where it is the partner, in increasing entry order.
+    const auto& nb = nl_.partners();
+    as_partner_offsets_.assign(p_.size() + 1, 0);
+    for (const std::uint32_t j : nb) {
+        ++as_partner_offsets_[j + 1];
+    }
+    for (std::size_t i = 0; i < p_.size(); ++i) {
+        as_partner_offsets_[i + 1] += as_partner_offsets_[i];
+    }
+    as_partner_.resize(nb.size());
+    std::vector<std::uint32_t> fill(as_partner_offsets_.begin(), as_partner_offsets_.end() - 1);
+    for (std::size_t k = 0; k < nb.size(); ++k) {
+        as_partner_[fill[nb[k]]++] = static_cast<std::uint32_t>(k);
+    }
 }
 
 void System::find_wall_candidates() {
@@ -157,128 +194,344 @@ void System::refresh() {
     compute_forces();
 }
 
-template <class Law> void System::pair_forces(const Law& law) {
-    const auto& nb = nl_.partners();
-    const auto& owner = nl_.owners();
-    auto& shear = nl_.shear();
-    const double dt = spec_.time_step;
-    const std::size_t entries = nb.size();
+namespace {
 
-    // Pass 1: which list entries touch. Branch-free, so the ~50 % unpredictable outcome costs
-    // nothing; histories of pairs apart are cleared.
-    active_.resize(entries);
+constexpr std::size_t block = 16;               // contacts evaluated together by the vectorised law
+constexpr std::size_t pair_chunk_size = 1024;   // list entries per work unit
+constexpr std::size_t particle_unit_size = 512; // particles per work unit
+constexpr std::size_t row = 9;                  // doubles per pair result: f, torque_i, torque_j
+
+// Keeps v when `keep`, else sets it to zero, with a bit mask: written as a multiplication by 0 or 1
+// it became a branch, mispredicted half of the time in the contact filter.
+inline void keep_or_clear(Vec3& v, bool keep) {
+    const std::uint64_t mask = std::uint64_t{0} - static_cast<std::uint64_t>(keep);
+    for (int q = 0; q < 3; ++q) {
+        v[q] = std::bit_cast<double>(std::bit_cast<std::uint64_t>(v[q]) & mask);
+    }
+}
+
+} // namespace
+
+// Work units have a fixed size, so the contacts of a unit, the blocks they are evaluated in and the
+// order of every sum do not depend on the number of threads.
+template <class Law, bool direct>
+void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, ChunkTotals& t) {
+    // Local pointers, as the compiler would otherwise reload each array's address per contact.
+    const std::uint32_t* __restrict nb = nl_.partners().data();
+    const std::uint32_t* __restrict owner = nl_.owners().data();
+    Vec3* __restrict shear = nl_.shear().data();
+    const Vec3* __restrict x = p_.x.data();
+    const Vec3* __restrict vel = p_.v.data();
+    const Vec3* __restrict omega = p_.omega.data();
+    const double* __restrict radius = p_.radius.data();
+    const double* __restrict mass = p_.mass.data();
+    Vec3* __restrict force = p_.force.data();
+    Vec3* __restrict torque = p_.torque.data();
+    const double dt = spec_.time_step;
+    const auto zero_row = static_cast<std::uint32_t>(nl_.partners().size());
+
+    // Which entries touch. Branch-free, so the ~50 % unpredictable outcome costs nothing;
+    // histories of pairs apart are cleared.
+    std::uint32_t active[pair_chunk_size];
     std::size_t n_active = 0;
-    for (std::size_t k = 0; k < entries; ++k) {
+    for (std::size_t k = begin; k < end; ++k) {
         const std::uint32_t i = owner[k];
         const std::uint32_t j = nb[k];
-        const double rsum = p_.radius[i] + p_.radius[j];
-        const bool touch = (p_.x[i] - p_.x[j]).squaredNorm() < rsum * rsum;
-        active_[n_active] = static_cast<std::uint32_t>(k);
+        const double rsum = radius[i] + radius[j];
+        const bool touch = (x[i] - x[j]).squaredNorm() < rsum * rsum;
+        active[n_active] = static_cast<std::uint32_t>(k);
+        if constexpr (!direct) {
+            // Rows of a chunk are its touching entries in order, from the chunk's first row.
+            result_row_[k] = touch ? static_cast<std::uint32_t>(begin + n_active) : zero_row;
+        }
         n_active += touch ? 1U : 0U;
-        shear[k] *= touch ? 1.0 : 0.0;
+        keep_or_clear(shear[k], touch);
     }
 
-    // Pass 2: forces of the touching pairs, in blocks: gather, evaluate (vectorised, the contacts
-    // of a block are independent), scatter.
-    constexpr std::size_t block = 16;
+    // Forces of the touching pairs, in blocks. The scalar gather only copies particle data; the
+    // geometry (square root, divisions) is derived in the vectorised loop together with the law,
+    // since the contacts of a block are independent; then the results are scattered (one thread)
+    // or stored in the chunk's rows (several threads).
     const double fn_floor = contact::floor_of(spec_.contact);
     const double rolling = contact::rolling_of(spec_.contact);
     contact::ContactBlock<block> c; // on the stack, so the vectoriser sees it does not alias
+    double d[3][block], ri[block], rj[block], mi[block], mj[block], ratio[block];
+    const bool one_pair = pairs_.size() == 1;
+    if (one_pair) {
+        for (std::size_t b = 0; b < block; ++b) {
+            c.set_pair(b, pairs_.at(0, 0));
+        }
+    }
+    double energy = 0.0;
+    double max_ratio = 0.0;
     for (std::size_t a0 = 0; a0 < n_active; a0 += block) {
         const std::size_t m = std::min(block, n_active - a0);
         for (std::size_t b = 0; b < m; ++b) {
-            const std::uint32_t k = active_[a0 + b];
+            const std::uint32_t k = active[a0 + b];
             const std::uint32_t i = owner[k];
             const std::uint32_t j = nb[k];
-            const double ri = p_.radius[i];
-            const double rj = p_.radius[j];
-            const Vec3 d = p_.x[i] - p_.x[j];
-            const double rsum = ri + rj;
-            const double dist = d.norm();
-            const double overlap = rsum - dist;
             for (int q = 0; q < 3; ++q) {
-                c.n[q][b] = d[q] / dist;
-                c.v[q][b] = p_.v[i][q] - p_.v[j][q];
-                c.wi[q][b] = p_.omega[i][q];
-                c.wj[q][b] = p_.omega[j][q];
+                d[q][b] = x[i][q] - x[j][q];
+                c.v[q][b] = vel[i][q] - vel[j][q];
+                c.wi[q][b] = omega[i][q];
+                c.wj[q][b] = omega[j][q];
                 c.s[q][b] = shear[k][q];
             }
-            c.overlap[b] = overlap;
-            c.r_eff[b] = ri * rj / rsum;
-            c.m_eff[b] = p_.mass[i] * p_.mass[j] / (p_.mass[i] + p_.mass[j]);
-            c.lever_i[b] = ri - 0.5 * overlap;
-            c.lever_j[b] = rj - 0.5 * overlap;
-            c.set_pair(b, pairs_.at(p_.material[i], p_.material[j]));
+            ri[b] = radius[i];
+            rj[b] = radius[j];
+            mi[b] = mass[i];
+            mj[b] = mass[j];
+            if (!one_pair) {
+                c.set_pair(b, pairs_.at(p_.material[i], p_.material[j]));
+            }
         }
 #pragma omp simd
         for (std::size_t b = 0; b < m; ++b) {
+            const double rsum = ri[b] + rj[b];
+            const double dist =
+                std::sqrt(d[0][b] * d[0][b] + d[1][b] * d[1][b] + d[2][b] * d[2][b]);
+            const double overlap = rsum - dist;
+            for (int q = 0; q < 3; ++q) {
+                c.n[q][b] = d[q][b] / dist;
+            }
+            c.overlap[b] = overlap;
+            c.r_eff[b] = ri[b] * rj[b] / rsum;
+            c.m_eff[b] = mi[b] * mj[b] / (mi[b] + mj[b]);
+            c.lever_i[b] = ri[b] - 0.5 * overlap;
+            c.lever_j[b] = rj[b] - 0.5 * overlap;
+            ratio[b] = overlap / (2.0 * std::min(ri[b], rj[b]));
             contact::evaluate_block(law, fn_floor, rolling, c, b, dt);
         }
         for (std::size_t b = 0; b < m; ++b) {
-            const std::uint32_t k = active_[a0 + b];
-            const std::uint32_t i = owner[k];
-            const std::uint32_t j = nb[k];
-            const Vec3 f(c.f[0][b], c.f[1][b], c.f[2][b]);
-            p_.force[i] += f;
-            p_.force[j] -= f;
-            p_.torque[i] += Vec3(c.ti[0][b], c.ti[1][b], c.ti[2][b]);
-            p_.torque[j] += Vec3(c.tj[0][b], c.tj[1][b], c.tj[2][b]);
+            const std::uint32_t k = active[a0 + b];
+            if constexpr (direct) {
+                const std::uint32_t i = owner[k];
+                const std::uint32_t j = nb[k];
+                const Vec3 f(c.f[0][b], c.f[1][b], c.f[2][b]);
+                force[i] += f;
+                force[j] -= f;
+                torque[i] += Vec3(c.ti[0][b], c.ti[1][b], c.ti[2][b]);
+                torque[j] += Vec3(c.tj[0][b], c.tj[1][b], c.tj[2][b]);
+            } else {
+                double* r = &pair_result_[row * (begin + a0 + b)];
+                for (int q = 0; q < 3; ++q) {
+                    r[q] = c.f[q][b];
+                    r[3 + q] = c.ti[q][b];
+                    r[6 + q] = c.tj[q][b];
+                }
+            }
             shear[k] = Vec3(c.s[0][b], c.s[1][b], c.s[2][b]);
-            counters_.elastic_energy += c.energy[b];
-            counters_.max_overlap_ratio =
-                std::max(counters_.max_overlap_ratio,
-                         c.overlap[b] / (2.0 * std::min(p_.radius[i], p_.radius[j])));
+            energy += c.energy[b];
+            max_ratio = std::max(max_ratio, ratio[b]);
         }
     }
-    counters_.particle_contacts = static_cast<long>(n_active);
+    t.energy = energy;
+    t.max_ratio = max_ratio;
+    t.contacts = static_cast<long>(n_active);
 }
 
-template <class Law> void System::wall_forces(const Law& law) {
+// Sums the pair results of particle i in increasing list-entry order, the order in which the
+// one-thread scatter adds them: entries where i is the partner come first (their owners have lower
+// indices, the list being built with j > i), then i's own row. Hence the same bits for any number
+// of threads.
+void System::sum_pair_results(std::size_t i) {
+    const auto& offsets = nl_.offsets();
+    const double* res = pair_result_.data();
+    double f0 = 0.0;
+    double f1 = 0.0;
+    double f2 = 0.0;
+    double t0 = 0.0;
+    double t1 = 0.0;
+    double t2 = 0.0;
+    for (std::uint32_t a = as_partner_offsets_[i]; a < as_partner_offsets_[i + 1]; ++a) {
+        const double* r = res + row * result_row_[as_partner_[a]];
+        f0 -= r[0];
+        f1 -= r[1];
+        f2 -= r[2];
+        t0 += r[6];
+        t1 += r[7];
+        t2 += r[8];
+    }
+    for (std::uint32_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+        const double* r = res + row * result_row_[k];
+        f0 += r[0];
+        f1 += r[1];
+        f2 += r[2];
+        t0 += r[3];
+        t1 += r[4];
+        t2 += r[5];
+    }
+    p_.force[i] = Vec3(f0, f1, f2);
+    p_.torque[i] = Vec3(t0, t1, t2);
+}
+
+// Wall contacts of the particles [p0, p1): the same blocked law with the wall as body j (at rest,
+// infinite mass). Contacts are collected wall by wall, so each particle receives its wall forces in
+// wall order, and units of particles can run in parallel.
+template <class Law>
+void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTotals& t) {
     const std::size_t nw = spec_.walls.size();
     const double dt = spec_.time_step;
-    for (std::size_t w = 0; w < nw; ++w) {
-        const Wall& wall = spec_.walls[w];
-        for (const std::uint32_t i : wall_candidates_[w]) {
-            const double r = p_.radius[i];
-            const WallContact wc = std::visit(
-                [&](const auto& shape) { return wall_contact(shape, p_.x[i], r); }, wall.shape);
-            Vec3& shear = wall_shear_[i * nw + w];
-            if (wc.overlap <= 0.0) {
-                shear.setZero();
-                continue;
-            }
-            contact::ContactInput c;
-            c.n = wc.n;
-            c.overlap = wc.overlap;
-            c.r_eff = wc.r_eff;
-            c.m_eff = p_.mass[i];
-            c.lever_i = r - wc.overlap;
-            c.lever_j = 0.0;
-            c.v_rel = p_.v[i];
-            c.omega_i = p_.omega[i];
-            c.omega_j = Vec3::Zero();
-            const PairProperties& pp = pairs_.at(p_.material[i], wall.material);
-            const contact::ContactOutput o =
-                contact::evaluate(law, spec_.contact, pp, c, shear, dt);
-            p_.force[i] += o.force;
-            p_.torque[i] += o.torque_i;
-            ++counters_.wall_contacts;
-            counters_.elastic_energy += o.elastic_energy;
-            counters_.max_overlap_ratio =
-                std::max(counters_.max_overlap_ratio, wc.overlap / (2.0 * r));
+    const double fn_floor = contact::floor_of(spec_.contact);
+    const double rolling = contact::rolling_of(spec_.contact);
+    constexpr std::size_t capacity = 512;
+    WallContact geo[capacity];
+    std::uint32_t active[capacity];
+    std::uint32_t wall_of[capacity];
+    std::size_t n_active = 0;
+    contact::ContactBlock<block> c;
+    double ratio[block];
+    for (std::size_t b = 0; b < block; ++b) {
+        c.lever_j[b] = 0.0;
+        for (int q = 0; q < 3; ++q) {
+            c.wj[q][b] = 0.0;
         }
+    }
+
+    // Evaluates the collected contacts in blocks and adds their forces.
+    const auto flush = [&] {
+        for (std::size_t a0 = 0; a0 < n_active; a0 += block) {
+            const std::size_t m = std::min(block, n_active - a0);
+            for (std::size_t b = 0; b < m; ++b) {
+                const std::uint32_t i = active[a0 + b];
+                const WallContact& g = geo[a0 + b];
+                const std::uint32_t w = wall_of[a0 + b];
+                const Vec3& s = wall_shear_[i * nw + w];
+                for (int q = 0; q < 3; ++q) {
+                    c.n[q][b] = g.n[q];
+                    c.v[q][b] = p_.v[i][q];
+                    c.wi[q][b] = p_.omega[i][q];
+                    c.s[q][b] = s[q];
+                }
+                c.overlap[b] = g.overlap;
+                c.r_eff[b] = g.r_eff;
+                c.m_eff[b] = p_.mass[i];
+                c.lever_i[b] = p_.radius[i] - g.overlap;
+                ratio[b] = g.overlap / (2.0 * p_.radius[i]);
+                c.set_pair(b, pairs_.at(p_.material[i], spec_.walls[w].material));
+            }
+#pragma omp simd
+            for (std::size_t b = 0; b < m; ++b) {
+                contact::evaluate_block(law, fn_floor, rolling, c, b, dt);
+            }
+            for (std::size_t b = 0; b < m; ++b) {
+                const std::uint32_t i = active[a0 + b];
+                p_.force[i] += Vec3(c.f[0][b], c.f[1][b], c.f[2][b]);
+                p_.torque[i] += Vec3(c.ti[0][b], c.ti[1][b], c.ti[2][b]);
+                wall_shear_[i * nw + wall_of[a0 + b]] = Vec3(c.s[0][b], c.s[1][b], c.s[2][b]);
+                t.energy += c.energy[b];
+                t.max_ratio = std::max(t.max_ratio, ratio[b]);
+            }
+        }
+        t.contacts += static_cast<long>(n_active);
+        n_active = 0;
+    };
+
+    for (std::size_t w = 0; w < nw; ++w) {
+        // Candidates are sorted by particle index.
+        const auto& cand = wall_candidates_[w];
+        const auto lo = std::lower_bound(cand.begin(), cand.end(), p0);
+        const auto hi = std::lower_bound(lo, cand.end(), p1);
+        std::visit(
+            [&](const auto& shape) {
+                for (auto it = lo; it != hi; ++it) {
+                    if (n_active == capacity) {
+                        flush();
+                    }
+                    const std::uint32_t i = *it;
+                    const WallContact g = wall_contact(shape, p_.x[i], p_.radius[i]);
+                    const bool touch = g.overlap > 0.0;
+                    geo[n_active] = g;
+                    active[n_active] = i;
+                    wall_of[n_active] = static_cast<std::uint32_t>(w);
+                    n_active += touch ? 1U : 0U;
+                    keep_or_clear(wall_shear_[i * nw + w], touch);
+                }
+            },
+            spec_.walls[w].shape);
+    }
+    flush();
+}
+
+void System::half_kick(std::size_t p0, std::size_t p1) {
+    const double h = 0.5 * spec_.time_step;
+    const Vec3 g = spec_.gravity;
+    // Local pointers: the compiler reloaded each array's address at every particle otherwise.
+    Vec3* __restrict v = p_.v.data();
+    Vec3* __restrict w = p_.omega.data();
+    const Vec3* __restrict f = p_.force.data();
+    const Vec3* __restrict t = p_.torque.data();
+    const double* __restrict inv_m = p_.inv_mass.data();
+    const double* __restrict inv_i = p_.inv_inertia.data();
+    for (std::size_t i = p0; i < p1; ++i) {
+        v[i] += h * (f[i] * inv_m[i] + g);
+        w[i] += h * inv_i[i] * t[i];
     }
 }
 
-void System::compute_forces() {
-    p_.clear_forces();
-    counters_ = ContactCounters{};
+void System::compute_forces(bool kick) {
+    const std::size_t n = p_.size();
+    const std::size_t entries = nl_.partners().size();
+    const bool direct = threads_ == 1;
+    const std::size_t pair_units = (entries + pair_chunk_size - 1) / pair_chunk_size;
+    const std::size_t particle_units = (n + particle_unit_size - 1) / particle_unit_size;
+    pair_totals_.assign(pair_units, ChunkTotals{});
+    particle_totals_.assign(particle_units, ChunkTotals{});
+    if (direct) {
+        p_.clear_forces();
+    } else {
+        pair_result_.resize(row * (entries + 1));
+        std::fill_n(pair_result_.end() - row, row, 0.0); // the zero row
+        result_row_.resize(entries);
+    }
+
     std::visit(
         [&](const auto& law) {
-            pair_forces(law);
-            wall_forces(law);
+            using Law = std::decay_t<decltype(law)>;
+#pragma omp parallel num_threads(threads_)
+            {
+            // Pair contacts by chunks of list entries.
+#pragma omp for schedule(static)
+                for (std::size_t u = 0; u < pair_units; ++u) {
+                    const std::size_t begin = u * pair_chunk_size;
+                    const std::size_t end = std::min(entries, begin + pair_chunk_size);
+                    if (direct) {
+                        pair_chunk<Law, true>(law, begin, end, pair_totals_[u]);
+                    } else {
+                        pair_chunk<Law, false>(law, begin, end, pair_totals_[u]);
+                    }
+                }
+            // Per particle: pair results summed (several threads), walls, half kick.
+#pragma omp for schedule(static)
+                for (std::size_t u = 0; u < particle_units; ++u) {
+                    const std::size_t p0 = u * particle_unit_size;
+                    const std::size_t p1 = std::min(n, p0 + particle_unit_size);
+                    if (!direct) {
+                        for (std::size_t i = p0; i < p1; ++i) {
+                            sum_pair_results(i);
+                        }
+                    }
+                    wall_unit(law, p0, p1, particle_totals_[u]);
+                    if (kick) {
+                        half_kick(p0, p1);
+                    }
+                }
+            }
         },
         spec_.contact.law);
+
+    // Sums in a fixed order, whatever the number of threads.
+    counters_ = ContactCounters{};
+    for (const ChunkTotals& t : pair_totals_) {
+        counters_.particle_contacts += t.contacts;
+        counters_.elastic_energy += t.energy;
+        counters_.max_overlap_ratio = std::max(counters_.max_overlap_ratio, t.max_ratio);
+    }
+    for (const ChunkTotals& t : particle_totals_) {
+        counters_.wall_contacts += t.contacts;
+        counters_.elastic_energy += t.energy;
+        counters_.max_overlap_ratio = std::max(counters_.max_overlap_ratio, t.max_ratio);
+    }
 }
 
 void System::step() {
@@ -286,22 +539,27 @@ void System::step() {
         rebuild_neighbours();
     }
     const double dt = spec_.time_step;
-    const double h = 0.5 * dt;
-    const Vec3 g = spec_.gravity;
     const std::size_t n = p_.size();
-    for (std::size_t i = 0; i < n; ++i) {
-        p_.v[i] += h * (p_.force[i] * p_.inv_mass[i] + g);
-        p_.omega[i] += h * p_.inv_inertia[i] * p_.torque[i];
-        p_.x[i] += dt * p_.v[i];
+    // Kick and drift; the displacement since the last list build is checked on the way.
+    const std::vector<Vec3>& x_build = nl_.positions_at_build();
+    const bool same_size = x_build.size() == n && nl_.offsets().size() == n + 1;
+    const double lim2 = 0.25 * nl_.skin() * nl_.skin();
+    const std::size_t units = (n + particle_unit_size - 1) / particle_unit_size;
+    int moved = same_size ? 0 : 1;
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(| : moved)
+    for (std::size_t u = 0; u < units; ++u) {
+        const std::size_t p0 = u * particle_unit_size;
+        const std::size_t p1 = std::min(n, p0 + particle_unit_size);
+        half_kick(p0, p1);
+        for (std::size_t i = p0; i < p1; ++i) {
+            p_.x[i] += dt * p_.v[i];
+            moved |= same_size && (p_.x[i] - x_build[i]).squaredNorm() > lim2 ? 1 : 0;
+        }
     }
-    if (nl_.needs_rebuild(p_)) {
+    if (moved != 0) {
         rebuild_neighbours();
     }
-    compute_forces();
-    for (std::size_t i = 0; i < n; ++i) {
-        p_.v[i] += h * (p_.force[i] * p_.inv_mass[i] + g);
-        p_.omega[i] += h * p_.inv_inertia[i] * p_.torque[i];
-    }
+    compute_forces(true);
     ++step_;
     time_ = static_cast<double>(step_) * dt;
 }
@@ -362,6 +620,7 @@ void System::restore_state(SystemState s) {
     // The list is restored as it was; rebuilding it now would reorder particles and change the
     // summation order. Forces and torques of the last step are part of the store; recomputing them
     // would advance the tangential histories a second time. Either would break exact continuation.
+    index_partners();
     find_wall_candidates();
     list_valid_ = true;
 }

@@ -85,6 +85,8 @@ class System {
     [[nodiscard]] const TimeStepReport& time_step_report() const { return ts_; }
     /// The scene this system was built from.
     [[nodiscard]] const SceneSpec& spec() const { return spec_; }
+    /// Threads used by the step loop (`SceneSpec::threads`, else OMP_NUM_THREADS, else 1).
+    [[nodiscard]] int threads() const { return threads_; }
     /// Number of neighbour-list builds so far.
     [[nodiscard]] long neighbour_builds() const { return nl_.builds(); }
     /// Checks that positions and velocities are finite; throws RunError otherwise.
@@ -100,12 +102,24 @@ class System {
                              const Vec3& omega);
 
   private:
+    /// Sums of one work unit (a chunk of list entries or wall candidates).
+    struct ChunkTotals {
+        double energy = 0;    // elastic energy of its contacts (J)
+        double max_ratio = 0; // largest overlap / smaller diameter (-)
+        long contacts = 0;    // touching pairs
+    };
+
     void insert(const InsertSpec& ins);
     void check_time_step();
-    void compute_forces();
-    template <class Law> void pair_forces(const Law& law);
-    template <class Law> void wall_forces(const Law& law);
+    void compute_forces(bool half_kick = false);
+    template <class Law, bool direct>
+    void pair_chunk(const Law& law, std::size_t begin, std::size_t end, ChunkTotals& t);
+    void sum_pair_results(std::size_t i);
+    template <class Law>
+    void wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTotals& t);
+    void half_kick(std::size_t p0, std::size_t p1);
     void rebuild_neighbours();
+    void index_partners();
     void find_wall_candidates();
 
     SceneSpec spec_;
@@ -114,7 +128,16 @@ class System {
     contact::NeighbourList nl_;
     std::vector<Vec3> wall_shear_; // [particle * n_walls + wall]
     std::vector<std::vector<std::uint32_t>> wall_candidates_;
-    std::vector<std::uint32_t> active_; // scratch: list entries in contact this step
+    // With more than one thread, pair results go to rows of `pair_result_` (force, torque on i,
+    // torque on j; a chunk's touching entries in order from the chunk's first entry index, plus a
+    // zero row at the end), `result_row_` maps each entry to its row or to the zero row, and each
+    // particle sums its rows in list order through `as_partner_` (entries where it is the partner,
+    // by particle in compressed rows).
+    std::vector<double> pair_result_;
+    std::vector<std::uint32_t> result_row_;
+    std::vector<std::uint32_t> as_partner_offsets_, as_partner_;
+    std::vector<ChunkTotals> pair_totals_, particle_totals_;
+    int threads_ = 1;
     ContactCounters counters_;
     TimeStepReport ts_;
     std::vector<std::string> warnings_;

@@ -653,6 +653,17 @@ CaseSpec read_case_text(const std::string& text, const std::string& name) {
         resolved.insert_or_assign("output", std::move(out_t));
     }
 
+    // [run]
+    {
+        const toml::table* t = root.table("run");
+        const toml::table empty;
+        toml::table out_t;
+        Section s(name, t ? *t : empty, "run", out_t);
+        c.scene.threads = static_cast<int>(s.integer("threads", 0, 0, 1024));
+        s.finish();
+        resolved.insert_or_assign("run", std::move(out_t));
+    }
+
     root.finish();
     std::ostringstream os;
     os << resolved << "\n";

@@ -146,5 +146,74 @@ TEST(System, SpheresComeToRestOnAPlane) {
     EXPECT_NEAR(sys.particles().x[0].z(), r - delta, settle * r);
 }
 
+// A pour of two materials into a box closed by planes, with a cylinder around it and rolling
+// resistance, so that every path of the step loop runs: pair contacts of two material pairs, plane
+// and cylinder walls, list rebuilds with particle re-sorting.
+SceneSpec threaded_pour(int threads) {
+    SceneSpec s;
+    s.materials.push_back({"a", 5e6, 0.45, 2500, 0.3, 0.5, 0.05});
+    s.materials.push_back({"b", 2e7, 0.3, 1500, 0.6, 0.3, 0.0});
+    s.contact.rolling = contact::RollingModel::constant_torque;
+    s.time_step = 1e-5;
+    s.skin = 0.4e-3;
+    s.threads = threads;
+    const Vec3 lo(-0.012, -0.012, 0.0);
+    const Vec3 hi(0.012, 0.012, 0.05);
+    for (int a = 0; a < 3; ++a) {
+        s.walls.push_back({"lo", PlaneWall{lo, Vec3::Unit(a)}, 0});
+        s.walls.push_back({"hi", PlaneWall{hi, -Vec3::Unit(a)}, 1});
+    }
+    s.walls.push_back({"tube", CylinderWall{Vec3::Zero(), Vec3::UnitZ(), 0.0155}, 1});
+    for (int m = 0; m < 2; ++m) {
+        InsertSpec ins;
+        ins.material = m;
+        ins.region = {Vec3(-0.011, -0.011, 0.002 + 0.02 * m), Vec3(0.011, 0.011, 0.022 + 0.02 * m)};
+        ins.count = 300;
+        ins.size.kind = SizeDistribution::Kind::uniform;
+        ins.size.min = 0.7e-3;
+        ins.size.max = 1.0e-3;
+        ins.velocity = Vec3(0.05, 0, -0.5);
+        ins.omega = Vec3(0, 20, 0);
+        s.inserts.push_back(ins);
+    }
+    return s;
+}
+
+TEST(System, OneAndTwoThreadsGiveTheSameBits) {
+    System one(threaded_pour(1));
+    System two(threaded_pour(2));
+#ifdef _OPENMP
+    EXPECT_EQ(two.threads(), 2);
+#endif
+    long pair_contacts = 0;
+    long wall_contacts = 0;
+    for (int k = 0; k < 2500; ++k) {
+        one.step();
+        two.step();
+        pair_contacts += one.counters().particle_contacts;
+        wall_contacts += one.counters().wall_contacts;
+    }
+    EXPECT_GT(pair_contacts, 30000);
+    EXPECT_GT(wall_contacts, 3000);
+    EXPECT_GT(one.neighbour_builds(), 5);
+    // Tolerance: none. Every force is summed in the same order whatever the thread count.
+    const ParticleStore& a = one.particles();
+    const ParticleStore& b = two.particles();
+    ASSERT_EQ(a.size(), b.size());
+    std::size_t differing = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        differing += a.id[i] != b.id[i] || a.x[i] != b.x[i] || a.v[i] != b.v[i] ||
+                             a.omega[i] != b.omega[i] || a.force[i] != b.force[i] ||
+                             a.torque[i] != b.torque[i]
+                         ? 1
+                         : 0;
+    }
+    EXPECT_EQ(differing, 0U);
+    EXPECT_EQ(one.counters().particle_contacts, two.counters().particle_contacts);
+    EXPECT_EQ(one.counters().wall_contacts, two.counters().wall_contacts);
+    EXPECT_EQ(one.counters().elastic_energy, two.counters().elastic_energy);
+    EXPECT_EQ(one.counters().max_overlap_ratio, two.counters().max_overlap_ratio);
+}
+
 } // namespace
 } // namespace kiln::dynamics

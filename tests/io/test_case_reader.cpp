@@ -66,6 +66,12 @@ TEST(CaseReader, GoodCaseReadsWithDefaultsFilledIn) {
     EXPECT_EQ(again.resolved_toml, c.resolved_toml);
 }
 
+TEST(CaseReader, RunThreadsDefaultsToZeroAndIsRangeChecked) {
+    EXPECT_EQ(read_case_text(good, "case.toml").scene.threads, 0);
+    EXPECT_EQ(read_case_text(good + "\n[run]\nthreads = 2\n", "case.toml").scene.threads, 2);
+    EXPECT_NE(error_of(good + "\n[run]\nthreads = -1\n").find("run.threads"), std::string::npos);
+}
+
 TEST(CaseReader, UnknownKeyNamesFileLineAndAllowedKeys) {
     const std::string e = error_of(edit("friction = 0.5", "friction = 0.5\nfriktion = 0.4"));
     EXPECT_NE(e.find("case.toml:12: material[0].friktion: unknown key"), std::string::npos) << e;
