@@ -37,6 +37,22 @@ std::vector<Pair> poses(const g::Superquadric& s) {
     return out;
 }
 
+/// Newton warm-started from the cold-start normal turned by 0.01 rad (one DEM step of motion).
+void run_warm(benchmark::State& state, const g::Superquadric& s) {
+    const std::vector<Pair> pairs = poses(s);
+    std::vector<Vec3> warm;
+    for (const Pair& p : pairs) {
+        const Vec3 n = g::support_newton_contact(p.a, p.b).normal;
+        warm.push_back((Quat(Eigen::AngleAxisd(0.01, n.unitOrthogonal())) * n).normalized());
+    }
+    std::size_t i = 0;
+    for (auto _ : state) {
+        const std::size_t k = i++ % pairs.size();
+        benchmark::DoNotOptimize(g::support_newton_contact(pairs[k].a, pairs[k].b, &warm[k]));
+    }
+    state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()));
+}
+
 void run(benchmark::State& state, const g::Superquadric& s, g::ConvexMethod m) {
     const std::vector<Pair> pairs = poses(s);
     std::size_t i = 0;
@@ -67,6 +83,12 @@ void BM_EllipsoidMpr(benchmark::State& st) {
 void BM_EllipsoidNewton(benchmark::State& st) {
     run(st, kEllipsoid, g::ConvexMethod::kSupportNewton);
 }
+void BM_EllipsoidNewtonWarm(benchmark::State& st) {
+    run_warm(st, kEllipsoid);
+}
+void BM_BlockyNewtonWarm(benchmark::State& st) {
+    run_warm(st, kBlocky);
+}
 void BM_BlockyEpa(benchmark::State& st) {
     run(st, kBlocky, g::ConvexMethod::kCcdEpa);
 }
@@ -82,6 +104,8 @@ void BM_BlockyNewton(benchmark::State& st) {
 BENCHMARK(BM_EllipsoidEpa);
 BENCHMARK(BM_EllipsoidMpr);
 BENCHMARK(BM_EllipsoidNewton);
+BENCHMARK(BM_EllipsoidNewtonWarm);
 BENCHMARK(BM_BlockyEpa);
 BENCHMARK(BM_BlockyMpr);
 BENCHMARK(BM_BlockyNewton);
+BENCHMARK(BM_BlockyNewtonWarm);

@@ -60,8 +60,12 @@ struct ConvexContact {
 [[nodiscard]] ConvexContact ccd_contact(const PosedSuperquadric& a, const PosedSuperquadric& b,
                                         bool use_mpr);
 
-/// Newton's method on the sphere of directions (convex_contact.cpp).
+/// Newton's method on the sphere of directions (convex_contact.cpp). Without `warm_normal` it
+/// samples 27 directions and runs Newton from the best 4 (robust, slow: a reference). With the
+/// previous step's normal (unit, from B to A, world frame) it runs one Newton from there (the DEM
+/// use: the pose changes little per step) and falls back to the cold start when that fails.
 [[nodiscard]] ConvexContact support_newton_contact(const PosedSuperquadric& a,
-                                                   const PosedSuperquadric& b);
+                                                   const PosedSuperquadric& b,
+                                                   const Vec3* warm_normal = nullptr);
 
 } // namespace kiln::geometry

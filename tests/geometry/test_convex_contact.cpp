@@ -168,3 +168,30 @@ TEST(ConvexContact, EpaAndNewtonAgreeOverRandomPoses) {
     EXPECT_LE(epa_early, kMaxFailures);
     EXPECT_LE(newton_unconverged, kMaxFailures);
 }
+
+TEST(ConvexContact, WarmStartedNewtonFindsTheColdStartResult) {
+    // A DEM step moves a pair little: start from the cold-start normal turned by 0.05 rad.
+    const g::Superquadric e = make(Vec3(1.0, 2.0, 3.0), 0.6, 0.8);
+    std::mt19937_64 rng(9);
+    std::normal_distribution<double> nd;
+    int fell_back = 0;
+    for (int t = 0; t < 200; ++t) {
+        g::PosedSuperquadric a{&e, Vec3::Zero(),
+                               Quat(nd(rng), nd(rng), nd(rng), nd(rng)).normalized()};
+        g::PosedSuperquadric b{&e, Vec3::Zero(),
+                               Quat(nd(rng), nd(rng), nd(rng), nd(rng)).normalized()};
+        const Vec3 u = Vec3(nd(rng), nd(rng), nd(rng)).normalized();
+        b.x = a.support(u) - 0.01 * u - b.support(-u);
+        const g::ConvexContact cold = g::support_newton_contact(a, b);
+        const Vec3 turned =
+            (Quat(Eigen::AngleAxisd(0.05, cold.normal.unitOrthogonal())) * cold.normal)
+                .normalized();
+        const g::ConvexContact warm = g::support_newton_contact(a, b, &turned);
+        fell_back += warm.iterations > 60 ? 1 : 0;
+        constexpr double kSame = 1e-9; // both converge to the gradient tolerance 1e-11 L
+        EXPECT_NEAR(warm.depth, cold.depth, kSame) << t;
+        EXPECT_GT(warm.normal.dot(cold.normal), 1.0 - kSame) << t;
+        EXPECT_LT(warm.iterations, cold.iterations) << t;
+    }
+    EXPECT_EQ(fell_back, 0);
+}
