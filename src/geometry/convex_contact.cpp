@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
+#include <numbers>
 #include <vector>
 
 namespace kiln::geometry {
@@ -22,6 +24,34 @@ ConvexContact convex_contact(const PosedSuperquadric& a, const PosedSuperquadric
         return support_newton_contact(a, b);
     }
     return {};
+}
+
+ContactCurvature contact_curvature(const PosedSuperquadric& a, const PosedSuperquadric& b,
+                                   const ConvexContact& c) {
+    // Deepest points: A's support against the normal, B's along it. Each body's curvature tensor
+    // is rotated to the world frame; near the contact the gap between the surfaces is
+    // 1/2 x^T (K_A + K_B) x in the common tangent plane (Johnson 1985, Sec. 4.1).
+    const Vec3 pa = a.q.conjugate() * (a.support(-c.normal) - a.x);
+    const Vec3 pb = b.q.conjugate() * (b.support(c.normal) - b.x);
+    const Mat3 ra = a.q.toRotationMatrix();
+    const Mat3 rb = b.q.toRotationMatrix();
+    const Mat3 k = ra * a.shape->curvature_tensor(pa) * ra.transpose() +
+                   rb * b.shape->curvature_tensor(pb) * rb.transpose();
+    const Vec3 e1 = c.normal.unitOrthogonal();
+    const Vec3 e2 = c.normal.cross(e1);
+    const double k11 = e1.dot(k * e1);
+    const double k22 = e2.dot(k * e2);
+    const double k12 = 0.5 * (e1.dot(k * e2) + e2.dot(k * e1));
+    const double mean = 0.5 * (k11 + k22);
+    const double diff = std::sqrt(0.25 * (k11 - k22) * (k11 - k22) + k12 * k12);
+    ContactCurvature out;
+    out.k_min = std::max(0.0, mean - diff);
+    out.k_max = std::max(0.0, mean + diff);
+    const double gauss = out.k_min * out.k_max;
+    out.effective_radius =
+        gauss > 0.0 ? 1.0 / std::sqrt(gauss) : std::numeric_limits<double>::infinity();
+    out.hertz_area = std::numbers::pi * out.effective_radius * std::max(0.0, c.depth);
+    return out;
 }
 
 namespace {

@@ -52,6 +52,21 @@ struct ConvexContact {
     int iterations = 0;          ///< iterations used (Newton: summed over the starts)
 };
 
+/// Local geometry of a contact for the contact laws and heat: relative principal curvatures in the
+/// common tangent plane (sum of both bodies' curvature tensors at their deepest points).
+struct ContactCurvature {
+    double k_min = 0.0;            ///< smaller relative principal curvature (1/m)
+    double k_max = 0.0;            ///< larger relative principal curvature (1/m)
+    double effective_radius = 0.0; ///< 1/sqrt(k_min k_max) (m), Johnson 1985 Sec. 4.2; infinite
+                                   ///< when a relative curvature is 0 (flat on flat)
+    double hertz_area = 0.0; ///< contact area estimate pi R_e delta (m^2) (Hertz, circular
+                             ///< contact of the equivalent radius); infinite with R_e
+};
+
+/// Relative curvature of a contact found by convex_contact (needs touching and a valid normal).
+[[nodiscard]] ContactCurvature
+contact_curvature(const PosedSuperquadric& a, const PosedSuperquadric& b, const ConvexContact& c);
+
 /// Overlap, normal and contact point of two posed superquadrics by the chosen method.
 [[nodiscard]] ConvexContact convex_contact(const PosedSuperquadric& a, const PosedSuperquadric& b,
                                            ConvexMethod method);

@@ -129,7 +129,7 @@ Vec3 Superquadric::support(const Vec3& d) const {
            Vec3(sgn(d.x()) * h.x() * t * p, sgn(d.y()) * h.y() * t * q, sgn(d.z()) * h.z() * s * r);
 }
 
-std::array<double, 2> Superquadric::principal_curvatures(const Vec3& p) const {
+Mat3 Superquadric::curvature_tensor(const Vec3& p) const {
     // Shape operator of an implicit surface: restricted to the tangent plane, the curvature tensor
     // is P H P / |grad F| with P = I - n n^T (e.g. Goldman, CAGD 22 (2005) 632, Sec. 4).
     const Vec3 g = gradient(p);
@@ -137,8 +137,12 @@ std::array<double, 2> Superquadric::principal_curvatures(const Vec3& p) const {
     KILN_ASSERT(gn > 0.0);
     const Vec3 n = g / gn;
     const Mat3 proj = Mat3::Identity() - n * n.transpose();
-    const Mat3 k = proj * hessian(p) * proj / gn;
-    const Eigen::SelfAdjointEigenSolver<Mat3> es(k);
+    return proj * hessian(p) * proj / gn;
+}
+
+std::array<double, 2> Superquadric::principal_curvatures(const Vec3& p) const {
+    const Vec3 n = normal(p);
+    const Eigen::SelfAdjointEigenSolver<Mat3> es(curvature_tensor(p));
     // One eigenvalue belongs to the normal (0); drop the one whose vector is most parallel to n.
     int drop = 0;
     for (int i = 1; i < 3; ++i) {

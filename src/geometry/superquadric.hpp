@@ -42,6 +42,9 @@ struct Superquadric {
     /// Support point: argmax over the solid of d . x for a body-frame direction d (m, body frame).
     /// Closed form from grad F parallel to d (derivation in docs/theory/shapes.md).
     [[nodiscard]] Vec3 support(const Vec3& d_body) const;
+    /// Curvature tensor (1/m) at a surface point p, body frame: the shape operator P H P / |grad F|
+    /// (P the projector on the tangent plane); zero along the normal.
+    [[nodiscard]] Mat3 curvature_tensor(const Vec3& p_body) const;
     /// Principal curvatures (1/m, >= 0 on a convex body; smaller first) at a surface point p.
     /// Radii are their inverses; a flat face gives 0 (infinite radius).
     [[nodiscard]] std::array<double, 2> principal_curvatures(const Vec3& p_body) const;

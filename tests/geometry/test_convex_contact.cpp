@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <gtest/gtest.h>
+#include <numbers>
 #include <random>
 #include <vector>
 
@@ -194,4 +195,29 @@ TEST(ConvexContact, WarmStartedNewtonFindsTheColdStartResult) {
         EXPECT_LT(warm.iterations, cold.iterations) << t;
     }
     EXPECT_EQ(fell_back, 0);
+}
+
+TEST(ConvexContact, RelativeCurvatureOfSpheresAndAnEllipsoidTip) {
+    // Spheres r1, r2: both relative curvatures 1/r1 + 1/r2, R_e = r1 r2 / (r1 + r2).
+    const g::Superquadric s1 = make(Vec3::Constant(1.0), 1.0, 1.0);
+    const g::Superquadric s2 = make(Vec3::Constant(0.25), 1.0, 1.0);
+    const g::PosedSuperquadric a{&s1, Vec3::Zero(), Quat(Eigen::AngleAxisd(0.7, Vec3::UnitZ()))};
+    const g::PosedSuperquadric b{&s2, Vec3(0.3, 1.2, -0.2).normalized() * 1.24, Quat::Identity()};
+    const g::ConvexContact c = g::convex_contact(a, b, g::ConvexMethod::kSupportNewton);
+    const g::ContactCurvature k = g::contact_curvature(a, b, c);
+    constexpr double kTol = 1e-8; // curvature from the analytic Hessian at a converged point
+    EXPECT_NEAR(k.k_min, 5.0, kTol);
+    EXPECT_NEAR(k.k_max, 5.0, kTol);
+    EXPECT_NEAR(k.effective_radius, 0.2, kTol);
+    EXPECT_NEAR(k.hertz_area, std::numbers::pi * 0.2 * 0.01, kTol);
+    // Tip (a, 0, 0) of an ellipsoid a, b, c (curvatures a/b^2, a/c^2) pressed on a sphere of radius
+    // r along x: relative curvatures a/c^2 + 1/r and a/b^2 + 1/r.
+    const g::Superquadric e = make(Vec3(1.0, 2.0, 3.0), 1.0, 1.0);
+    const g::PosedSuperquadric pe{&e, Vec3::Zero(), Quat::Identity()};
+    const g::PosedSuperquadric ps{&s1, Vec3(1.99, 0.0, 0.0), Quat::Identity()};
+    const g::ConvexContact ce = g::convex_contact(pe, ps, g::ConvexMethod::kSupportNewton);
+    const g::ContactCurvature ke = g::contact_curvature(pe, ps, ce);
+    EXPECT_NEAR(ce.depth, 0.01, kTol);
+    EXPECT_NEAR(ke.k_min, 1.0 / 9.0 + 1.0, kTol);
+    EXPECT_NEAR(ke.k_max, 1.0 / 4.0 + 1.0, kTol);
 }
