@@ -221,3 +221,64 @@ TEST(ConvexContact, RelativeCurvatureOfSpheresAndAnEllipsoidTip) {
     EXPECT_NEAR(ke.k_min, 1.0 / 9.0 + 1.0, kTol);
     EXPECT_NEAR(ke.k_max, 1.0 / 4.0 + 1.0, kTol);
 }
+
+TEST(ConvexContact, ExtremeExponentsAndSizeRatio) {
+    // Blockiness at both ends of the supported range, and a size ratio of 1:10.
+    const std::vector<g::Superquadric> shapes = {
+        make(Vec3(1.0, 1.0, 1.0), 0.1, 0.1), // near-box, sharpest supported edges
+        make(Vec3(1.0, 1.0, 1.0), 1.9, 1.9), // near-octahedron
+        make(Vec3(1.0, 0.8, 1.2), 0.1, 1.9), // near-double-pyramid sections
+        make(Vec3(0.1, 0.1, 0.1), 1.0, 1.0), // sphere ten times smaller
+    };
+    std::mt19937_64 rng(77);
+    std::normal_distribution<double> nd;
+    std::uniform_real_distribution<double> ud(0.0, 1.0);
+    int unconverged = 0;
+    int gjk_missed = 0;
+    int epa_early = 0;
+    int compared = 0;
+    double worst = 0.0;
+    double worst_order = -1.0;
+    for (int trial = 0; trial < 800; ++trial) {
+        const auto& sa = shapes[static_cast<std::size_t>(trial) % 4];
+        const auto& sb = shapes[static_cast<std::size_t>(trial / 4) % 4];
+        g::PosedSuperquadric a{&sa, Vec3::Zero(),
+                               Quat(nd(rng), nd(rng), nd(rng), nd(rng)).normalized()};
+        g::PosedSuperquadric b{&sb, Vec3::Zero(),
+                               Quat(nd(rng), nd(rng), nd(rng), nd(rng)).normalized()};
+        const Vec3 u = Vec3(nd(rng), nd(rng), nd(rng)).normalized();
+        // Overlap relative to the smaller body: 1e-4 to 5e-2 of its largest half-axis.
+        const double small = std::min(sa.half_axes.maxCoeff(), sb.half_axes.maxCoeff());
+        const double overlap = small * std::pow(10.0, -4.0 + 2.7 * ud(rng));
+        b.x = a.support(u) - overlap * u - b.support(-u);
+        const g::ConvexContact nw = g::support_newton_contact(a, b);
+        const g::ConvexContact epa = g::convex_contact(a, b, g::ConvexMethod::kCcdEpa);
+        EXPECT_TRUE(nw.touching) << trial;
+        unconverged += nw.converged ? 0 : 1;
+        if (!epa.touching) {
+            ++gjk_missed;
+            continue;
+        }
+        const double scale = sa.half_axes.maxCoeff() + sb.half_axes.maxCoeff();
+        worst_order = std::max(worst_order, (epa.depth - nw.depth) / scale);
+        epa_early += epa.depth < 0.5 * nw.depth ? 1 : 0;
+        if (epa.depth > 0.5 * nw.depth && nw.converged) {
+            ++compared;
+            worst = std::max(worst, std::abs(epa.depth - nw.depth) / scale);
+        }
+    }
+    std::printf("extremes: compared %d of 800, Newton unconverged %d, GJK missed %d, EPA stopped "
+                "early %d, worst depth difference %.3g L\n",
+                compared, unconverged, gjk_missed, epa_early, worst);
+    constexpr double kSandwich = 1e-9; // EPA <= MTD <= Newton, round-off only
+    EXPECT_LT(worst_order, kSandwich);
+    constexpr double kDepthAgreement = 2e-5; // EPA's precision, as in the random-pose test
+    EXPECT_LT(worst, kDepthAgreement);
+    // Newton, the default method, must handle the extremes: every pair converges and overlaps.
+    EXPECT_EQ(unconverged, 0);
+    // libccd is a known weak spot here (measured: 2 % GJK misses, 4.5 % EPA early stops, see
+    // docs/theory/shapes.md); a 10 % guard catches a regression of the adapter, not of libccd.
+    constexpr int kLibccdGuard = 80;
+    EXPECT_LE(gjk_missed, kLibccdGuard);
+    EXPECT_LE(epa_early, kLibccdGuard);
+}
