@@ -32,6 +32,24 @@ struct Clump {
     [[nodiscard]] bool contains(const Vec3& p_body) const;
 };
 
+/// Resultant force (N) and torque about the centre of mass (N m) on a rigid body, world frame.
+struct Wrench {
+    Vec3 force = Vec3::Zero();  ///< total force (N), world frame
+    Vec3 torque = Vec3::Zero(); ///< total torque about the centre of mass (N m), world frame
+};
+
+/// Adds one sub-sphere contact of a clump: force = normal + tangential contact force (N, world),
+/// applied at `point` (m, world); `com` is the clump's centre of mass (m, world). Both parts give a
+/// torque: a member sphere's normal force does not pass through the clump's centre of mass. (The
+/// seed's Eq. 24, Oschmann 2019 L357, keeps only the tangential part, which is wrong for clumps.)
+/// `weight` is 1, or 1/j for the seed's averaging over j simultaneous contacts with one partner
+/// (its Eq. 23).
+inline void add_contact(Wrench& w, const Vec3& com, const Vec3& point, const Vec3& force,
+                        double weight = 1.0) {
+    w.force += weight * force;
+    w.torque += (point - com).cross(weight * force);
+}
+
 /// Mass properties of a union of spheres by column quadrature: an n x n midpoint grid over the
 /// union's x-y bounding box, and along each column the exact union of the spheres' z intervals with
 /// exact integrals of 1, z, z^2. The error comes from the x-y rule only and is O(n^-1.5) (the

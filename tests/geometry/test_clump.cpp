@@ -163,3 +163,25 @@ TEST(Clump, BadInputIsAnInputError) {
     EXPECT_THROW((void)g::make_clump({}, "x", 100), kiln::InputError);
     EXPECT_THROW((void)g::make_clump({{Vec3::Zero(), -1.0}}, "x", 100), kiln::InputError);
 }
+
+TEST(Clump, NormalForceOfAMemberSphereGivesATorque) {
+    // Two-sphere clump along x, pressed on its right sphere by a purely normal force along -z: the
+    // force does not pass through the centre of mass, so it turns the clump (the seed's Eq. 24,
+    // tangential force only, would give no torque).
+    const g::Clump c = g::make_clump(pair(1.0, 1.0, 1.5), "pair", 400);
+    const kiln::Quat q = kiln::Quat::Identity();
+    const Vec3 com(0.0, 0.0, 0.0);
+    // Body x is the long axis (smallest moment); the right sphere's top point in the world frame.
+    const Vec3 right = q * c.spheres[0].centre.cwiseAbs();
+    const Vec3 point = right + Vec3(0.0, 0.0, 1.0);
+    g::Wrench w;
+    g::add_contact(w, com, point, Vec3(0.0, 0.0, -2.0));
+    EXPECT_NEAR(w.force.z(), -2.0, 1e-15);
+    EXPECT_NEAR(w.torque.y(), 2.0 * right.x(), 1e-12);
+    EXPECT_GT(std::abs(w.torque.y()), 1.0);
+    // The seed's averaging: two equal contacts with one partner, weight 1/2 each, sum to one.
+    g::Wrench avg;
+    g::add_contact(avg, com, point, Vec3(0.0, 0.0, -2.0), 0.5);
+    g::add_contact(avg, com, point, Vec3(0.0, 0.0, -2.0), 0.5);
+    EXPECT_LT((avg.force - w.force).norm(), 1e-15);
+}
