@@ -35,6 +35,9 @@ int main(int argc, char** argv) {
                                             "shape template (shapes/README.md)");
     info->add_option("shape", shape_name, "template name (shapes/NAME.toml) or path to a .toml")
         ->required();
+    std::string vtk_file;
+    info->add_option("--vtk", vtk_file,
+                     "also write the template's surface mesh (.vtp) for ParaView");
     info->add_option("--density", density, "material density (kg/m^3)")
         ->capture_default_str()
         ->check(CLI::PositiveNumber);
@@ -42,7 +45,7 @@ int main(int argc, char** argv) {
     CLI11_PARSE(cli, argc, argv);
     try {
         if (info->parsed()) {
-            return kiln::app::print_shape_info(shape_name, density);
+            return kiln::app::print_shape_info(shape_name, density, vtk_file);
         }
         const kiln::io::CaseSpec spec = kiln::io::read_case_file(case_file);
         if (check->parsed()) {

@@ -4,12 +4,13 @@
 
 #include "geometry/shape_metrics.hpp"
 #include "io/shape_reader.hpp"
+#include "io/shape_vtk.hpp"
 
 #include <fmt/format.h>
 
 namespace kiln::app {
 
-int print_shape_info(const std::string& shape, double density) {
+int print_shape_info(const std::string& shape, double density, const std::string& vtk_file) {
     const auto file = io::find_shape_file(shape, io::default_shape_dirs());
     const geometry::ShapeTemplate t = io::read_shape_file(file);
     const geometry::ShapeFactors f = geometry::shape_factors(t);
@@ -45,6 +46,10 @@ int print_shape_info(const std::string& shape, double density) {
     for (int k = 0; k < 3; ++k) {
         fmt::print("  flow along {}    {:.5f} (shadow {:.6e} m^2)\n", "xyz"[k], f.crosswise[k],
                    f.projected[k]);
+    }
+    if (!vtk_file.empty()) {
+        io::write_surface_vtp(vtk_file, {geometry::surface_mesh(t.shape, 24)});
+        fmt::print("surface mesh      {} (body frame, m)\n", vtk_file);
     }
     return 0;
 }

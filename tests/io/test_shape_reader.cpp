@@ -2,10 +2,15 @@
 
 #include "core/error.hpp"
 #include "io/shape_reader.hpp"
+#include "io/shape_vtk.hpp"
 
 #include <filesystem>
 #include <gtest/gtest.h>
 #include <numbers>
+#include <vtkCellData.h>
+#include <vtkNew.h>
+#include <vtkPolyData.h>
+#include <vtkXMLPolyDataReader.h>
 
 namespace io = kiln::io;
 namespace g = kiln::geometry;
@@ -67,4 +72,24 @@ TEST(ShapeReader, ErrorsNameFileLineAndKey) {
     EXPECT_NE(message("kind = \"clump\"\n[[sphere]]\ncentre = [0,0]\nradius = 1e-3\n")
                   .find("sphere[0].centre"),
               std::string::npos);
+}
+
+TEST(ShapeReader, SurfaceMeshOfPosedClumpsReadsBack) {
+    const g::ShapeTemplate t =
+        io::read_shape_file(io::find_shape_file("cylinder_12", io::default_shape_dirs()));
+    const g::SurfaceMesh m = g::surface_mesh(t.shape, 6);
+    const std::vector<g::SurfaceMesh> parts = {
+        g::posed(m, kiln::Vec3::Zero(), kiln::Quat::Identity()),
+        g::posed(m, kiln::Vec3(0.01, 0, 0),
+                 kiln::Quat(Eigen::AngleAxisd(1.0, kiln::Vec3::UnitY())))};
+    const auto file = std::filesystem::temp_directory_path() / "kiln_test_shape_mesh.vtp";
+    io::write_surface_vtp(file, parts);
+    vtkNew<vtkXMLPolyDataReader> reader;
+    reader->SetFileName(file.string().c_str());
+    reader->Update();
+    vtkPolyData* poly = reader->GetOutput();
+    EXPECT_EQ(poly->GetNumberOfPoints(), static_cast<vtkIdType>(2 * m.vertices.size()));
+    EXPECT_EQ(poly->GetNumberOfCells(), static_cast<vtkIdType>(2 * m.triangles.size()));
+    EXPECT_NE(poly->GetCellData()->GetArray("part"), nullptr);
+    std::filesystem::remove(file);
 }
