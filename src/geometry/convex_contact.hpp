@@ -59,8 +59,8 @@ struct ContactCurvature {
     double k_max = 0.0;            ///< larger relative principal curvature (1/m)
     double effective_radius = 0.0; ///< 1/sqrt(k_min k_max) (m), Johnson 1985 Sec. 4.2; infinite
                                    ///< when a relative curvature is 0 (flat on flat)
-    double hertz_area = 0.0; ///< contact area estimate pi R_e delta (m^2) (Hertz, circular
-                             ///< contact of the equivalent radius); infinite with R_e
+    double hertz_area = 0.0;       ///< contact area estimate pi R_e delta (m^2) (Hertz, circular
+                                   ///< contact of the equivalent radius); infinite with R_e
 };
 
 /// Relative curvature of a contact found by convex_contact (needs touching and a valid normal).
