@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
+#include <limits>
 #include <numbers>
 
 namespace kiln::geometry {
@@ -86,6 +87,14 @@ Mat3 Superquadric::hessian(const Vec3& p) const {
                      (h.y() * h.y());
         hess(0, 1) = n2 * (m - 1.0) * n1 * s2 * du * dv * sgn(p.x()) * sgn(p.y()) / (h.x() * h.y());
         hess(1, 0) = hess(0, 1);
+    } else {
+        // On the z axis: the surface near the pole drops as rho^n2, so the x-y curvature is 0
+        // for n2 > 2 (e1 < 1), infinite for n2 < 2 (e1 > 1) and 2/a^2, 2/b^2 for n2 = 2 (exact
+        // along the axes when n1 != 2).
+        const double k =
+            n2 < 2.0 ? std::numeric_limits<double>::infinity() : (n2 > 2.0 ? 0.0 : 2.0);
+        hess(0, 0) = k / (h.x() * h.x());
+        hess(1, 1) = k / (h.y() * h.y());
     }
     hess(2, 2) = n2 * (n2 - 1.0) * std::pow(w, n2 - 2.0) / (h.z() * h.z());
     return hess;
@@ -142,7 +151,12 @@ Mat3 Superquadric::curvature_tensor(const Vec3& p) const {
 
 std::array<double, 2> Superquadric::principal_curvatures(const Vec3& p) const {
     const Vec3 n = normal(p);
-    const Eigen::SelfAdjointEigenSolver<Mat3> es(curvature_tensor(p));
+    const Mat3 tensor = curvature_tensor(p);
+    if (!tensor.allFinite()) {
+        // A tip or crease (exponent > 1 at a pole or an axis): zero radius.
+        return {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+    }
+    const Eigen::SelfAdjointEigenSolver<Mat3> es(tensor);
     // One eigenvalue belongs to the normal (0); drop the one whose vector is most parallel to n.
     int drop = 0;
     for (int i = 1; i < 3; ++i) {

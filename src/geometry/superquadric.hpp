@@ -46,7 +46,8 @@ struct Superquadric {
     /// (P the projector on the tangent plane); zero along the normal.
     [[nodiscard]] Mat3 curvature_tensor(const Vec3& p_body) const;
     /// Principal curvatures (1/m, >= 0 on a convex body; smaller first) at a surface point p.
-    /// Radii are their inverses; a flat face gives 0 (infinite radius).
+    /// Radii are their inverses; a flat point gives 0 (infinite radius), a tip (exponent > 1 at a
+    /// pole) gives infinity for both (zero radius).
     [[nodiscard]] std::array<double, 2> principal_curvatures(const Vec3& p_body) const;
 
     /// Volume (m^3), Jaklic et al. 2000, Eq. 2.60: 2 a b c e1 e2 B(e1/2+1, e1) B(e2/2, e2/2).

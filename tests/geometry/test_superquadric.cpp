@@ -178,6 +178,23 @@ TEST(Superquadric, CurvatureOfSphereAndEllipsoidTips) {
     EXPECT_NEAR(1.0 / kc[1], 1.5, 1e-10);
 }
 
+TEST(Superquadric, PoleCurvatureJumpsAtExponentOne) {
+    // At the pole (0, 0, c) the surface drops as rho^(2/e1): flat for e1 < 1, a tip for e1 > 1,
+    // and the sphere's 1/r only at e1 = 1.
+    for (const double e : {0.95, 1.0, 1.05}) {
+        const g::Superquadric q = make(Vec3::Constant(2.0), e, e);
+        const auto k = q.principal_curvatures(Vec3(0.0, 0.0, 2.0));
+        if (e < 1.0) {
+            EXPECT_EQ(k[1], 0.0);
+        } else if (e > 1.0) {
+            EXPECT_TRUE(std::isinf(k[0]));
+        } else {
+            EXPECT_NEAR(k[0], 0.5, 1e-12);
+            EXPECT_NEAR(k[1], 0.5, 1e-12);
+        }
+    }
+}
+
 TEST(Superquadric, ExponentsOutsideTheSupportedRangeAreInputErrors) {
     EXPECT_THROW(make(Vec3::Ones(), 2.5, 1.0).validate("x"), kiln::InputError);
     EXPECT_THROW(make(Vec3::Ones(), 1.0, 0.05).validate("x"), kiln::InputError);
