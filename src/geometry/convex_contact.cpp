@@ -114,7 +114,10 @@ class SupportMinimiser {
             if (lambda_min < floor) {
                 h += (floor - lambda_min) * Eigen::Matrix2d::Identity();
             }
-            step = h.ldlt().solve(rhs);
+            // 2 x 2 solve by Cramer's rule (h is positive definite after the shift).
+            const double det = h(0, 0) * h(1, 1) - h(0, 1) * h(1, 0);
+            step = Eigen::Vector2d((h(1, 1) * rhs.x() - h(0, 1) * rhs.y()) / det,
+                                   (h(0, 0) * rhs.y() - h(1, 0) * rhs.x()) / det);
             if (step.norm() > kMaxTurn) {
                 step *= kMaxTurn / step.norm();
             }
