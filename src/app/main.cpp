@@ -1,6 +1,7 @@
 // The `kiln` command line.
 
 #include "app/runner.hpp"
+#include "app/shape_info.hpp"
 #include "core/error.hpp"
 #include "io/case_reader.hpp"
 #include "kiln/version.hpp"
@@ -28,8 +29,24 @@ int main(int argc, char** argv) {
         cli.add_subcommand("check", "validate a case file and print it with defaults filled in");
     check->add_option("case", case_file, "case file (TOML)")->required();
 
+    std::string shape_name;
+    double density = 1000.0;
+    auto* info = cli.add_subcommand("info", "print volume, mass properties and shape factors of a "
+                                            "shape template (shapes/README.md)");
+    info->add_option("shape", shape_name, "template name (shapes/NAME.toml) or path to a .toml")
+        ->required();
+    std::string vtk_file;
+    info->add_option("--vtk", vtk_file,
+                     "also write the template's surface mesh (.vtp) for ParaView");
+    info->add_option("--density", density, "material density (kg/m^3)")
+        ->capture_default_str()
+        ->check(CLI::PositiveNumber);
+
     CLI11_PARSE(cli, argc, argv);
     try {
+        if (info->parsed()) {
+            return kiln::app::print_shape_info(shape_name, density, vtk_file);
+        }
         const kiln::io::CaseSpec spec = kiln::io::read_case_file(case_file);
         if (check->parsed()) {
             fmt::print("{}", spec.resolved_toml);

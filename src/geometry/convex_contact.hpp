@@ -1,0 +1,86 @@
+#pragma once
+// Narrow phase between two convex bodies given by support maps (superquadrics today; any convex
+// shape with a support map later). Two independent methods compute the same quantity, the
+// minimum translation distance (MTD): the overlap delta = min over unit n of h_A(n) + h_B(-n),
+// h the support function (distance of the supporting plane), i.e. the distance from the origin to
+// the boundary of the Minkowski difference A - B (van den Bergen 2003, Collision Detection in
+// Interactive 3D Environments, Sec. 4.3.4):
+//  - kCcdEpa: GJK + EPA of libccd (Gilbert, Johnson & Keerthi 1988; van den Bergen 2001);
+//  - kSupportNewton: Newton's method on the unit sphere for min h_A(n) + h_B(-n) with the analytic
+//    support maps (gradient = s_A(n) - s_B(-n) by Danskin's theorem), started from 15 directions.
+// kCcdMpr (Minkowski portal refinement, Snethen 2008, via libccd) is also offered: it is faster
+// but its depth is the distance to a boundary point found along the portal, an upper bound of the
+// MTD, not the MTD itself.
+//
+// Normal convention (as in docs/theory/contact.md): `normal` is the unit vector from B towards A
+// (world frame); moving A by depth * normal separates the bodies.
+
+#include "core/types.hpp"
+#include "geometry/superquadric.hpp"
+
+namespace kiln::geometry {
+
+/// A superquadric placed in the world: centre x (m) and orientation q (body -> world).
+struct PosedSuperquadric {
+    const Superquadric* shape = nullptr; ///< geometry, body frame
+    Vec3 x = Vec3::Zero();               ///< centre (m), world frame
+    Quat q = Quat::Identity();           ///< orientation, body -> world
+
+    /// Support point (m, world frame) for a world-frame direction d.
+    [[nodiscard]] Vec3 support(const Vec3& d_world) const {
+        return x + q * shape->support(q.conjugate() * d_world);
+    }
+    /// Length scale of the body for relative tolerances: the largest half-axis (m).
+    [[nodiscard]] double length_scale() const { return shape->half_axes.maxCoeff(); }
+};
+
+/// Narrow-phase methods.
+enum class ConvexMethod {
+    kCcdEpa,       ///< libccd GJK + EPA: the MTD
+    kCcdMpr,       ///< libccd MPR: penetration along the portal (upper bound of the MTD)
+    kSupportNewton ///< Newton on the sphere of directions, analytic support maps: the MTD
+};
+
+/// Result of a narrow-phase query. Failures are reported, never thrown.
+struct ConvexContact {
+    bool touching = false;       ///< bodies overlap (depth > 0)
+    bool converged = true;       ///< false: the method hit its iteration limit or failed
+    double depth = 0.0;          ///< overlap (m); kSupportNewton: negative = gap when apart
+    Vec3 normal = Vec3::UnitX(); ///< unit normal from B towards A, world frame
+    Vec3 point = Vec3::Zero();   ///< contact point (m), world frame: midpoint of the deepest
+                                 ///< points of A and B along the normal
+    int iterations = 0;          ///< iterations used (Newton: summed over the starts)
+};
+
+/// Local geometry of a contact for the contact laws and heat: relative principal curvatures in the
+/// common tangent plane (sum of both bodies' curvature tensors at their deepest points).
+struct ContactCurvature {
+    double k_min = 0.0;            ///< smaller relative principal curvature (1/m)
+    double k_max = 0.0;            ///< larger relative principal curvature (1/m)
+    double effective_radius = 0.0; ///< 1/sqrt(k_min k_max) (m), Johnson 1985 Sec. 4.2; infinite
+                                   ///< when a relative curvature is 0 (flat on flat)
+    double hertz_area = 0.0;       ///< contact area estimate pi R_e delta (m^2) (Hertz, circular
+                                   ///< contact of the equivalent radius); infinite with R_e
+};
+
+/// Relative curvature of a contact found by convex_contact (needs touching and a valid normal).
+[[nodiscard]] ContactCurvature
+contact_curvature(const PosedSuperquadric& a, const PosedSuperquadric& b, const ConvexContact& c);
+
+/// Overlap, normal and contact point of two posed superquadrics by the chosen method.
+[[nodiscard]] ConvexContact convex_contact(const PosedSuperquadric& a, const PosedSuperquadric& b,
+                                           ConvexMethod method);
+
+/// libccd adapter (ccd_adapter.cpp, the only file that includes libccd): kCcdEpa or kCcdMpr.
+[[nodiscard]] ConvexContact ccd_contact(const PosedSuperquadric& a, const PosedSuperquadric& b,
+                                        bool use_mpr);
+
+/// Newton's method on the sphere of directions (convex_contact.cpp). Without `warm_normal` it
+/// samples 27 directions and runs Newton from the best 4 (robust, slow: a reference). With the
+/// previous step's normal (unit, from B to A, world frame) it runs one Newton from there (the DEM
+/// use: the pose changes little per step) and falls back to the cold start when that fails.
+[[nodiscard]] ConvexContact support_newton_contact(const PosedSuperquadric& a,
+                                                   const PosedSuperquadric& b,
+                                                   const Vec3* warm_normal = nullptr);
+
+} // namespace kiln::geometry

@@ -1,0 +1,110 @@
+// Rotation convention and splitting integrator; see rotation.hpp and docs/theory/rotation.md.
+
+#include "geometry/rotation.hpp"
+
+#include "core/error.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <utility>
+
+namespace kiln::geometry {
+
+Mat3 rotation_matrix(const Quat& q) {
+    // Standard form (e.g. Shoemake 1985) with w the scalar part; the seed's printed matrix
+    // (Oschmann 2019, Table 3) has a wrong (2,2) entry and sign errors and is not used.
+    const Quat u = q.normalized();
+    const double w = u.w();
+    const double x = u.x();
+    const double y = u.y();
+    const double z = u.z();
+    Mat3 r;
+    r << 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y), //
+        2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),  //
+        2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y);
+    return r;
+}
+
+Vec3 angular_velocity_world(const Quat& q, const Vec3& L_world, const Vec3& inertia_principal) {
+    const Vec3 l_body = world_to_body(q, L_world);
+    return body_to_world(q, l_body.cwiseQuotient(inertia_principal));
+}
+
+Vec3 angular_momentum_world(const Quat& q, const Vec3& omega_world, const Vec3& inertia_principal) {
+    const Vec3 w_body = world_to_body(q, omega_world);
+    return body_to_world(q, w_body.cwiseProduct(inertia_principal));
+}
+
+double rotational_energy(const Quat& q, const Vec3& L_world, const Vec3& inertia_principal) {
+    const Vec3 l_body = world_to_body(q, L_world);
+    return 0.5 * l_body.cwiseProduct(l_body).cwiseQuotient(inertia_principal).sum();
+}
+
+namespace {
+
+/// Exact flow of T_k = L_k^2 / (2 I_k) over h: the body turns by phi = h L_k / I_k about body axis
+/// k, so q <- q * exp(phi/2 e_k) and the body components of L turn by -phi about e_k.
+void rotate_about_axis(Quat& q, Vec3& l_body, const Vec3& inertia, int k, double h) {
+    const double phi = h * l_body[k] / inertia[k];
+    const double c = std::cos(phi);
+    const double s = std::sin(phi);
+    const int i = (k + 1) % 3;
+    const int j = (k + 2) % 3;
+    const double li = l_body[i];
+    const double lj = l_body[j];
+    l_body[i] = c * li + s * lj;
+    l_body[j] = -s * li + c * lj;
+    Eigen::Vector3d axis = Eigen::Vector3d::Zero();
+    axis[k] = std::sin(0.5 * phi);
+    q = q * Quat(std::cos(0.5 * phi), axis.x(), axis.y(), axis.z());
+}
+
+} // namespace
+
+void free_rotate(Quat& q, const Vec3& L_world, const Vec3& inertia_principal, double dt) {
+    KILN_ASSERT((inertia_principal.array() > 0.0).all());
+    Vec3 l_body = world_to_body(q, L_world);
+    rotate_about_axis(q, l_body, inertia_principal, 0, 0.5 * dt);
+    rotate_about_axis(q, l_body, inertia_principal, 1, 0.5 * dt);
+    rotate_about_axis(q, l_body, inertia_principal, 2, dt);
+    rotate_about_axis(q, l_body, inertia_principal, 1, 0.5 * dt);
+    rotate_about_axis(q, l_body, inertia_principal, 0, 0.5 * dt);
+    q.normalize();
+}
+
+void rotation_step(Quat& q, Vec3& L_world, const Vec3& inertia_principal, const Vec3& torque_world,
+                   double dt) {
+    kick_angular_momentum(L_world, torque_world, 0.5 * dt);
+    free_rotate(q, L_world, inertia_principal, dt);
+    kick_angular_momentum(L_world, torque_world, 0.5 * dt);
+}
+
+double elliptic_k(double m) {
+    KILN_ASSERT(m >= 0.0 && m < 1.0);
+    double a = 1.0;
+    double b = std::sqrt(1.0 - m);
+    for (int it = 0; it < 60 && std::abs(a - b) > 1e-16 * a; ++it) {
+        const double an = 0.5 * (a + b);
+        b = std::sqrt(a * b);
+        a = an;
+    }
+    return std::numbers::pi / (2.0 * a);
+}
+
+double free_rotor_half_period(const Vec3& inertia_sorted, double L2, double energy) {
+    double i1 = inertia_sorted[0];
+    const double i2 = inertia_sorted[1];
+    double i3 = inertia_sorted[2];
+    KILN_ASSERT(i1 < i2 && i2 < i3);
+    // Landau & Lifshitz Eq. 37.10 holds for L^2 > 2 E I2; for L^2 < 2 E I2 the suffixes 1 and 3
+    // are interchanged (their remark after Eq. 37.12).
+    if (L2 < 2.0 * energy * i2) {
+        std::swap(i1, i3);
+    }
+    const double rate = std::sqrt((i3 - i2) * (L2 - 2.0 * energy * i1) / (i1 * i2 * i3));
+    const double m = (i2 - i1) * (2.0 * energy * i3 - L2) / ((i3 - i2) * (L2 - 2.0 * energy * i1));
+    KILN_ASSERT(m >= 0.0 && m < 1.0);
+    return 2.0 * elliptic_k(m) / rate;
+}
+
+} // namespace kiln::geometry
