@@ -1,0 +1,148 @@
+#include "heat/linear_solvers.hpp"
+
+#include <cmath>
+
+namespace kiln::heat {
+
+void KrylovWorkspace::resize(Eigen::Index n) {
+    for (Eigen::VectorXd* vec : {&r, &r0, &p, &v, &s, &t, &y, &z}) {
+        vec->setZero(n);
+    }
+}
+
+double dot(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+    double sum = 0.0;
+    for (Eigen::Index i = 0; i < a.size(); ++i) {
+        sum += a[i] * b[i];
+    }
+    return sum;
+}
+
+double norm(const Eigen::VectorXd& a) {
+    return std::sqrt(dot(a, a));
+}
+
+void multiply(const SparseMatrix& a, const Eigen::VectorXd& x, Eigen::VectorXd& y) {
+    const int* outer = a.outerIndexPtr();
+    const int* inner = a.innerIndexPtr();
+    const double* val = a.valuePtr();
+    for (Eigen::Index i = 0; i < a.rows(); ++i) {
+        double sum = 0.0;
+        for (int k = outer[i]; k < outer[i + 1]; ++k) {
+            sum += val[k] * x[inner[k]];
+        }
+        y[i] = sum;
+    }
+}
+
+SolveStats conjugate_gradient(const SparseMatrix& a, const Eigen::VectorXd& inv_diag,
+                              const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance,
+                              int max_iterations, KrylovWorkspace& ws) {
+    SolveStats st;
+    const double b_norm = norm(b);
+    if (b_norm == 0.0) {
+        x.setZero();
+        st.converged = true;
+        return st;
+    }
+    const double target = tolerance * b_norm;
+    multiply(a, x, ws.t);
+    ws.r = b - ws.t;
+    double r_norm = norm(ws.r);
+    if (r_norm <= target) {
+        st.residual = r_norm / b_norm;
+        st.converged = true;
+        return st;
+    }
+    ws.z = inv_diag.cwiseProduct(ws.r);
+    ws.p = ws.z;
+    double rz = dot(ws.r, ws.z);
+    while (st.iterations < max_iterations) {
+        multiply(a, ws.p, ws.t);
+        const double alpha = rz / dot(ws.p, ws.t);
+        x += alpha * ws.p;
+        ws.r -= alpha * ws.t;
+        ++st.iterations;
+        r_norm = norm(ws.r);
+        if (r_norm <= target) {
+            st.converged = true;
+            break;
+        }
+        ws.z = inv_diag.cwiseProduct(ws.r);
+        const double rz_new = dot(ws.r, ws.z);
+        ws.p = ws.z + (rz_new / rz) * ws.p;
+        rz = rz_new;
+    }
+    st.residual = r_norm / b_norm;
+    return st;
+}
+
+SolveStats bicgstab(const SparseMatrix& a, const Eigen::VectorXd& inv_diag,
+                    const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance,
+                    int max_iterations, KrylovWorkspace& ws) {
+    SolveStats st;
+    const double b_norm = norm(b);
+    if (b_norm == 0.0) {
+        x.setZero();
+        st.converged = true;
+        return st;
+    }
+    const double target = tolerance * b_norm;
+    multiply(a, x, ws.t);
+    ws.r = b - ws.t;
+    double r_norm = norm(ws.r);
+    if (r_norm <= target) {
+        st.residual = r_norm / b_norm;
+        st.converged = true;
+        return st;
+    }
+    ws.r0 = ws.r;
+    double rho = 1.0;
+    double alpha = 1.0;
+    double omega = 1.0;
+    ws.v.setZero();
+    ws.p.setZero();
+    while (st.iterations < max_iterations) {
+        double rho_new = dot(ws.r0, ws.r);
+        if (std::abs(rho_new) < 1e-30 * dot(ws.r0, ws.r0)) {
+            // r has become orthogonal to the shadow residual: restart from the current residual.
+            ws.r0 = ws.r;
+            rho_new = dot(ws.r, ws.r);
+            ws.v.setZero();
+            ws.p.setZero();
+            rho = alpha = omega = 1.0;
+        }
+        const double beta = (rho_new / rho) * (alpha / omega);
+        rho = rho_new;
+        ws.p = ws.r + beta * (ws.p - omega * ws.v);
+        ws.y = inv_diag.cwiseProduct(ws.p);
+        multiply(a, ws.y, ws.v);
+        alpha = rho / dot(ws.r0, ws.v);
+        ws.s = ws.r - alpha * ws.v;
+        ++st.iterations;
+        if (norm(ws.s) <= target) {
+            x += alpha * ws.y;
+            r_norm = norm(ws.s);
+            st.converged = true;
+            break;
+        }
+        ws.z = inv_diag.cwiseProduct(ws.s);
+        multiply(a, ws.z, ws.t);
+        const double tt = dot(ws.t, ws.t);
+        omega = tt > 0.0 ? dot(ws.t, ws.s) / tt : 0.0;
+        x += alpha * ws.y + omega * ws.z;
+        ws.r = ws.s - omega * ws.t;
+        r_norm = norm(ws.r);
+        if (r_norm <= target) {
+            st.converged = true;
+            break;
+        }
+        if (omega == 0.0) {
+            break;
+        }
+    }
+    st.residual = r_norm / b_norm;
+    return st;
+}
+
+} // namespace kiln::heat
