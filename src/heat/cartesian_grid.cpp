@@ -11,7 +11,8 @@
 //  4. Cut-cell volume and centroid by the divergence theorem about the cell centre x0:
 //     V = 1/3 (sum_faces (h/2) a_f + integral_patch (x - x0).n dA) and
 //     V (x_c - x0)_i = 1/2 closed-surface integral of (x - x0)_i^2 n_i dA.
-//     Summed over cells, the face terms cancel: total volume = volume of the triangulation.
+//     The face terms use the exact implicit surface and the patch terms the triangulation, so
+//     the two are consistent only to the triangulation error, O(h^2) with edges ~ h/4.
 //  5. Cut cells with volume fraction below merge_fraction join the neighbour with the largest
 //     shared aperture (volumes, patches and links are summed), which keeps the conditioning
 //     of the implicit matrix moderate.

@@ -1,8 +1,8 @@
 #pragma once
 // Body-fixed Cartesian cut-cell grid for any shape of shape.hpp. Cell faces are apertures (the part
 // of each cell face inside the body), boundary cells carry the surface patch clipped from a fine
-// triangulation, and cut-cell volumes follow from the divergence theorem, so the total volume and
-// area are those of the triangulated surface and converge at second order in the cell size.
+// triangulation, and cut-cell volumes follow from the divergence theorem; total area (that of the
+// clipped triangulation) and volume converge at about second order in the cell size.
 
 #include "heat/shape.hpp"
 #include "heat/thermal_grid.hpp"

@@ -55,12 +55,12 @@ struct SolverSettings {
 /// Boundary data of one particle for one step, per boundary face of the grid (body frame).
 /// Empty spans mean "use the uniform value".
 struct BoundaryLoad {
-    double ambient = 0.0;                     ///< uniform ambient temperature T_inf (K)
-    std::span<const double> ambient_per_face; ///< T_inf per face (K), overrides `ambient`
-    double flux = 0.0;                        ///< uniform heat flux into the body (W/m^2)
-    std::span<const double> flux_per_face;    ///< flux into the body per face (W/m^2), added
-    std::span<const double> heat_rate;        ///< external heat rate into each face's cell (W),
-                                              ///< e.g. lagged contact conduction
+    double ambient = 0.0;                       ///< uniform ambient temperature T_inf (K)
+    std::span<const double> ambient_per_face{}; ///< T_inf per face (K), overrides `ambient`
+    double flux = 0.0;                          ///< uniform heat flux into the body (W/m^2)
+    std::span<const double> flux_per_face{};    ///< flux into the body per face (W/m^2), added
+    std::span<const double> heat_rate{};        ///< external heat rate into each face's cell (W),
+                                                ///< e.g. lagged contact conduction
 };
 
 /// What one step did.

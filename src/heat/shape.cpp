@@ -52,14 +52,20 @@ SurfaceMesh unit_cube_mesh(int n) {
                     const int b = a + 1;
                     const int c = a + (n + 1) + 1;
                     const int d = a + (n + 1);
-                    // (u, v, axis) is right-handed, so a-b-c is counter-clockwise seen from +axis.
-                    if (side > 0.0) {
-                        m.triangles.push_back({a, b, c});
-                        m.triangles.push_back({a, c, d});
-                    } else {
-                        m.triangles.push_back({a, c, b});
-                        m.triangles.push_back({a, d, c});
+                    // Each quad is split along the diagonal through the corner nearest the face
+                    // centre, so the mesh is mirror-symmetric about the face mid-lines (n even).
+                    const bool ac = (2 * i + 1 - n) * (2 * j + 1 - n) > 0;
+                    std::array<int, 3> t1 =
+                        ac ? std::array<int, 3>{a, b, c} : std::array<int, 3>{a, b, d};
+                    std::array<int, 3> t2 =
+                        ac ? std::array<int, 3>{a, c, d} : std::array<int, 3>{b, c, d};
+                    // (u, v, axis) is right-handed: a-b-c is counter-clockwise seen from +axis.
+                    if (side < 0.0) {
+                        std::swap(t1[1], t1[2]);
+                        std::swap(t2[1], t2[2]);
                     }
+                    m.triangles.push_back(t1);
+                    m.triangles.push_back(t2);
                 }
             }
         }
@@ -68,7 +74,8 @@ SurfaceMesh unit_cube_mesh(int n) {
 }
 
 int quads_per_face(double extent, double edge) {
-    return std::max(1, static_cast<int>(std::ceil(extent / edge)));
+    const int n = std::max(2, static_cast<int>(std::ceil(extent / edge)));
+    return n + n % 2; // even, for a mirror-symmetric split
 }
 
 } // namespace
@@ -176,7 +183,7 @@ double reference_area(const Shape& shape) {
                                      b.half.z() * b.half.x());
                    },
                    [&](const Superquadric& q) {
-                       const double e = q.half.minCoeff() / 100.0;
+                       const double e = q.half.minCoeff() / 50.0;
                        const double coarse = surface_mesh(shape, e).area();
                        const double fine = surface_mesh(shape, e / 2.0).area();
                        return (4.0 * fine - coarse) / 3.0;

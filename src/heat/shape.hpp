@@ -64,7 +64,7 @@ void validate(const Shape& shape);
 [[nodiscard]] double exact_volume(const Shape& shape);
 
 /// Exact surface area (m^2) of sphere and box; for the superquadric (no closed form) the
-/// Richardson extrapolation of two fine triangulations (edges 1/100 and 1/200 of the smallest
+/// Richardson extrapolation of two fine triangulations (edges 1/50 and 1/100 of the smallest
 /// semi-axis; the triangulation error is second order in the edge length).
 [[nodiscard]] double reference_area(const Shape& shape);
 
