@@ -38,42 +38,69 @@ void multiply(const SparseMatrix& a, const Eigen::VectorXd& x, Eigen::VectorXd& 
 SolveStats conjugate_gradient(const SparseMatrix& a, const Eigen::VectorXd& inv_diag,
                               const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance,
                               int max_iterations, KrylovWorkspace& ws) {
+    // Loops are fused by hand (three passes per iteration: A p with p.Ap; the x, r, z updates with
+    // r.z and r.r; the new direction), which halves the memory traffic of the expression form.
     SolveStats st;
-    const double b_norm = norm(b);
-    if (b_norm == 0.0) {
+    const Eigen::Index n = a.rows();
+    const int* outer = a.outerIndexPtr();
+    const int* inner = a.innerIndexPtr();
+    const double* val = a.valuePtr();
+    const double* d = inv_diag.data();
+    double* xp = x.data();
+    double* r = ws.r.data();
+    double* z = ws.z.data();
+    double* p = ws.p.data();
+    double* q = ws.t.data();
+    double bb = 0.0;
+    double rr = 0.0;
+    double rz = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+        double sum = 0.0;
+        for (int k = outer[i]; k < outer[i + 1]; ++k) {
+            sum += val[k] * xp[inner[k]];
+        }
+        r[i] = b[i] - sum;
+        z[i] = d[i] * r[i];
+        p[i] = z[i];
+        bb += b[i] * b[i];
+        rr += r[i] * r[i];
+        rz += r[i] * z[i];
+    }
+    if (bb == 0.0) {
         x.setZero();
         st.converged = true;
         return st;
     }
-    const double target = tolerance * b_norm;
-    multiply(a, x, ws.t);
-    ws.r = b - ws.t;
-    double r_norm = norm(ws.r);
-    if (r_norm <= target) {
-        st.residual = r_norm / b_norm;
-        st.converged = true;
-        return st;
-    }
-    ws.z = inv_diag.cwiseProduct(ws.r);
-    ws.p = ws.z;
-    double rz = dot(ws.r, ws.z);
-    while (st.iterations < max_iterations) {
-        multiply(a, ws.p, ws.t);
-        const double alpha = rz / dot(ws.p, ws.t);
-        x += alpha * ws.p;
-        ws.r -= alpha * ws.t;
-        ++st.iterations;
-        r_norm = norm(ws.r);
-        if (r_norm <= target) {
-            st.converged = true;
-            break;
+    const double target2 = tolerance * tolerance * bb;
+    while (rr > target2 && st.iterations < max_iterations) {
+        double pq = 0.0;
+        for (Eigen::Index i = 0; i < n; ++i) {
+            double sum = 0.0;
+            for (int k = outer[i]; k < outer[i + 1]; ++k) {
+                sum += val[k] * p[inner[k]];
+            }
+            q[i] = sum;
+            pq += p[i] * sum;
         }
-        ws.z = inv_diag.cwiseProduct(ws.r);
-        const double rz_new = dot(ws.r, ws.z);
-        ws.p = ws.z + (rz_new / rz) * ws.p;
+        const double alpha = rz / pq;
+        double rz_new = 0.0;
+        rr = 0.0;
+        for (Eigen::Index i = 0; i < n; ++i) {
+            xp[i] += alpha * p[i];
+            r[i] -= alpha * q[i];
+            z[i] = d[i] * r[i];
+            rz_new += r[i] * z[i];
+            rr += r[i] * r[i];
+        }
+        ++st.iterations;
+        const double beta = rz_new / rz;
         rz = rz_new;
+        for (Eigen::Index i = 0; i < n; ++i) {
+            p[i] = z[i] + beta * p[i];
+        }
     }
-    st.residual = r_norm / b_norm;
+    st.residual = std::sqrt(rr / bb);
+    st.converged = rr <= target2;
     return st;
 }
 
