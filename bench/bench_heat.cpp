@@ -45,7 +45,8 @@ void run(benchmark::State& state, const std::shared_ptr<const ThermalGrid>& g, S
     std::vector<double> t(static_cast<std::size_t>(g->size()), 300.0);
     long s = 0;
     for (auto _ : state) {
-        const double ambient = 400.0 + 50.0 * std::sin(2.0 * 3.14159265 * static_cast<double>(s) / 200.0);
+        const double ambient =
+            400.0 + 50.0 * std::sin(2.0 * 3.14159265 * static_cast<double>(s) / 200.0);
         const StepReport r = op.step(t, {.ambient = ambient});
         benchmark::DoNotOptimize(r);
         ++s;
@@ -55,11 +56,21 @@ void run(benchmark::State& state, const std::shared_ptr<const ThermalGrid>& g, S
         static_cast<double>(op.total_iterations()) / static_cast<double>(op.total_solves());
 }
 
-void BM_CubeCG_Fo003(benchmark::State& s) { run(s, cube_grid(), SolverKind::cg, 0.03); }
-void BM_CubeBiCGSTAB_Fo003(benchmark::State& s) { run(s, cube_grid(), SolverKind::bicgstab, 0.03); }
-void BM_CubeCG_Fo3(benchmark::State& s) { run(s, cube_grid(), SolverKind::cg, 3.0); }
-void BM_CubeBiCGSTAB_Fo3(benchmark::State& s) { run(s, cube_grid(), SolverKind::bicgstab, 3.0); }
-void BM_SphereCG_Fo003(benchmark::State& s) { run(s, sphere_grid(), SolverKind::cg, 0.03); }
+void BM_CubeCG_Fo003(benchmark::State& s) {
+    run(s, cube_grid(), SolverKind::cg, 0.03);
+}
+void BM_CubeBiCGSTAB_Fo003(benchmark::State& s) {
+    run(s, cube_grid(), SolverKind::bicgstab, 0.03);
+}
+void BM_CubeCG_Fo3(benchmark::State& s) {
+    run(s, cube_grid(), SolverKind::cg, 3.0);
+}
+void BM_CubeBiCGSTAB_Fo3(benchmark::State& s) {
+    run(s, cube_grid(), SolverKind::bicgstab, 3.0);
+}
+void BM_SphereCG_Fo003(benchmark::State& s) {
+    run(s, sphere_grid(), SolverKind::cg, 0.03);
+}
 void BM_SphereBiCGSTAB_Fo003(benchmark::State& s) {
     run(s, sphere_grid(), SolverKind::bicgstab, 0.03);
 }
@@ -71,9 +82,15 @@ BENCHMARK(BM_SphereCG_Fo003);
 BENCHMARK(BM_SphereBiCGSTAB_Fo003);
 
 #if KILN_HAVE_CHOLMOD
-void BM_CubeCholmod_Fo003(benchmark::State& s) { run(s, cube_grid(), SolverKind::cholmod, 0.03); }
-void BM_CubeCholmod_Fo3(benchmark::State& s) { run(s, cube_grid(), SolverKind::cholmod, 3.0); }
-void BM_SphereCholmod_Fo3(benchmark::State& s) { run(s, sphere_grid(), SolverKind::cholmod, 3.0); }
+void BM_CubeCholmod_Fo003(benchmark::State& s) {
+    run(s, cube_grid(), SolverKind::cholmod, 0.03);
+}
+void BM_CubeCholmod_Fo3(benchmark::State& s) {
+    run(s, cube_grid(), SolverKind::cholmod, 3.0);
+}
+void BM_SphereCholmod_Fo3(benchmark::State& s) {
+    run(s, sphere_grid(), SolverKind::cholmod, 3.0);
+}
 BENCHMARK(BM_CubeCholmod_Fo003);
 BENCHMARK(BM_CubeCholmod_Fo3);
 BENCHMARK(BM_SphereCholmod_Fo3);

@@ -7,11 +7,36 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <vector>
 
 namespace kiln::heat {
 
 /// Row-major sparse matrix (CSR) of a heat system (W/K).
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
+
+/// The same matrix in a fixed-width row layout for fast products: the diagonal apart, up to
+/// `width` off-diagonal entries per row (padded with zeros), and the rare longer rows' surplus (the
+/// spherical grid's centre cell) as a short list. Built once per operator.
+class EllMatrix {
+  public:
+    /// Copies `a`; the width is the largest off-diagonal count of a row, capped at 8.
+    void assign(const SparseMatrix& a);
+    /// y = A x (no allocation).
+    void multiply(const double* x, double* y) const;
+    /// Number of rows.
+    [[nodiscard]] Eigen::Index rows() const { return n_; }
+
+  private:
+    template <int W> void multiply_fixed(const double* x, double* y) const;
+    Eigen::Index n_ = 0;
+    int width_ = 0;
+    std::vector<double> diag_;
+    std::vector<int> col_;
+    std::vector<double> val_;
+    std::vector<int> extra_row_;
+    std::vector<int> extra_col_;
+    std::vector<double> extra_val_;
+};
 
 /// Outcome of one linear solve.
 struct SolveStats {
@@ -38,14 +63,13 @@ struct KrylovWorkspace {
 void multiply(const SparseMatrix& a, const Eigen::VectorXd& x, Eigen::VectorXd& y);
 
 /// Jacobi-preconditioned CG for SPD `a`; `x` holds the initial guess and returns the solution.
-SolveStats conjugate_gradient(const SparseMatrix& a, const Eigen::VectorXd& inv_diag,
+SolveStats conjugate_gradient(const EllMatrix& a, const Eigen::VectorXd& inv_diag,
                               const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance,
                               int max_iterations, KrylovWorkspace& ws);
 
 /// Jacobi-preconditioned BiCGSTAB for a general `a`; `x` holds the initial guess and returns the
 /// solution.
-SolveStats bicgstab(const SparseMatrix& a, const Eigen::VectorXd& inv_diag,
-                    const Eigen::VectorXd& b, Eigen::VectorXd& x, double tolerance,
-                    int max_iterations, KrylovWorkspace& ws);
+SolveStats bicgstab(const EllMatrix& a, const Eigen::VectorXd& inv_diag, const Eigen::VectorXd& b,
+                    Eigen::VectorXd& x, double tolerance, int max_iterations, KrylovWorkspace& ws);
 
 } // namespace kiln::heat

@@ -84,6 +84,7 @@ ResolvedOperator::ResolvedOperator(std::shared_ptr<const ThermalGrid> grid,
     a_.resize(n, n);
     a_.setFromTriplets(triplets.begin(), triplets.end());
     a_.makeCompressed();
+    ell_.assign(a_);
     inv_diag_.resize(n);
     for (int i = 0; i < n; ++i) {
         inv_diag_[i] = 1.0 / diag[static_cast<std::size_t>(i)];
@@ -141,17 +142,17 @@ StepReport ResolvedOperator::step(std::span<double> temperature, const BoundaryL
     StepReport rep;
     switch (solver_.kind) {
     case SolverKind::cg:
-        rep.solve = conjugate_gradient(a_, inv_diag_, rhs_, x_, solver_.tolerance,
+        rep.solve = conjugate_gradient(ell_, inv_diag_, rhs_, x_, solver_.tolerance,
                                        solver_.max_iterations, work_);
         break;
     case SolverKind::bicgstab:
         rep.solve =
-            bicgstab(a_, inv_diag_, rhs_, x_, solver_.tolerance, solver_.max_iterations, work_);
+            bicgstab(ell_, inv_diag_, rhs_, x_, solver_.tolerance, solver_.max_iterations, work_);
         break;
     case SolverKind::cholmod:
 #if KILN_HAVE_CHOLMOD
         factor_->solve(rhs_, x_);
-        multiply(a_, x_, work_.t);
+        ell_.multiply(x_.data(), work_.t.data());
         work_.r = rhs_ - work_.t;
         rep.solve.residual = norm(work_.r) / norm(rhs_);
         rep.solve.converged = true;

@@ -113,6 +113,7 @@ class ResolvedOperator {
     std::vector<double> capacity_;  // J/K per cell
     std::vector<double> g_surface_; // W/K per boundary face
     SparseMatrix a_;
+    EllMatrix ell_;
     Eigen::VectorXd inv_diag_;
     Eigen::VectorXd rhs_;
     Eigen::VectorXd x_;
