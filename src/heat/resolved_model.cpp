@@ -1,6 +1,7 @@
 #include "heat/resolved_model.hpp"
 
 #include "core/error.hpp"
+#include "heat/convection.hpp"
 #if KILN_HAVE_CHOLMOD
 #include "heat/cholmod_solver.hpp"
 #endif
@@ -66,7 +67,7 @@ ResolvedOperator::ResolvedOperator(std::shared_ptr<const ThermalGrid> grid,
             throw InputError("heat: heat transfer coefficient must be >= 0 W/(m^2 K)");
         }
         const BoundaryFace& b = g.boundary[f];
-        g_surface_[f] = h > 0.0 ? b.area / (1.0 / h + b.distance / k) : 0.0;
+        g_surface_[f] = heat::surface_conductance(b, h, k);
         diag[static_cast<std::size_t>(b.cell)] += g_surface_[f];
     }
     std::vector<Eigen::Triplet<double, int>> triplets;
