@@ -119,6 +119,7 @@ TEST(SphereConvection, SpatialOrder) {
     for (const int n : {5, 10, 20, 40}) {
         const auto g = spherical(n);
         const Errors e = compare(richardson(run(g, bi, 400), run(g, bi, 800)), bi);
+        write_convergence("spherical", 1.0 / (n + 0.5), e.centre, e.mean, n == 5);
         const double oc = n == 5 ? 0.0 : observed_order(prev.centre, e.centre, 2.0, 1.0);
         const double om = n == 5 ? 0.0 : observed_order(prev.mean, e.mean, 2.0, 1.0);
         std::printf("  %-4d  %-8.4f  %-10.2e  %-9.2e  %-13.2f %.2f\n", n, 1.0 / (n + 0.5), e.centre,
@@ -145,6 +146,7 @@ TEST(SphereConvection, SpatialOrder) {
     for (const int n : {8, 12, 16, 24}) {
         const auto g = cartesian(n);
         const Errors e = compare(richardson(run(g, bi, 400), run(g, bi, 800)), bi);
+        write_convergence("cartesian", 2.0 / n, e.centre, e.mean);
         const double oc =
             nprev ? observed_order(cprev.centre, e.centre, 1.0 / nprev, 1.0 / n) : 0.0;
         const double om = nprev ? observed_order(cprev.mean, e.mean, 1.0 / nprev, 1.0 / n) : 0.0;

@@ -77,6 +77,8 @@ TEST(BodyConvection, CubeAgainstProductOfSlabSolutions) {
             EXPECT_LT(std::abs(dv), geometry_roundoff);
             EXPECT_LT(std::abs(da), geometry_roundoff);
             const double e = max_error(run(cube, n, bi), exact);
+            write_convergence("cube Bi=" + std::to_string(static_cast<int>(bi)), 1.0 / n, e, e,
+                              bi == 1.0 && n == 8);
             std::printf("  %-6d  %-6d  %-10.2e  %-10.2e  %-9.2e  %.2f\n", n, g.size(), dv, da, e,
                         prev > 0.0 ? std::log(prev / e) / std::log(n / (n == 12   ? 8.0
                                                                         : n == 16 ? 12.0
@@ -109,6 +111,7 @@ TEST(BodyConvection, SuperquadricAgainstGridConvergedReference) {
         const double dv = g.total_volume() / heat::exact_volume(sq) - 1.0;
         const double da = g.total_area() / heat::reference_area(sq) - 1.0;
         const double e = max_error(run(sq, n, bi), ref);
+        write_convergence("superquadric vs 32 across", 1.0 / n, e, e);
         std::printf("  %-6d  %-6d  %-10.2e  %-10.2e  %-9.2e\n", n, g.size(), dv, da, e);
         e8 = n == 8 ? e : e8;
         e16 = n == 16 ? e : e16;

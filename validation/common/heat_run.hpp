@@ -5,7 +5,10 @@
 #include "heat/resolved_model.hpp"
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace kiln::validation {
@@ -53,6 +56,21 @@ inline std::vector<ThetaSample> richardson(const std::vector<ThetaSample>& coars
 /// Fastest available solver for long runs with a constant matrix.
 inline heat::SolverKind direct_or_cg() {
     return heat::cholmod_available() ? heat::SolverKind::cholmod : heat::SolverKind::cg;
+}
+
+/// Appends a row "series,size,centre_error,mean_error" to convergence.csv of this case (for
+/// plot_heat_convergence.py); the file is replaced by the first call of a run (`fresh`).
+inline void write_convergence(const std::string& series, double size, double centre_error,
+                              double mean_error, bool fresh = false) {
+    const std::filesystem::path file = std::filesystem::path(KILN_RESULT_DIR) / "convergence.csv";
+    std::filesystem::create_directories(KILN_RESULT_DIR);
+    const bool header = fresh || !std::filesystem::exists(file);
+    std::ofstream f(file, fresh ? std::ios::trunc : std::ios::app);
+    if (header) {
+        f << "series,size,centre_error,mean_error\n";
+    }
+    f.precision(10);
+    f << series << ',' << size << ',' << centre_error << ',' << mean_error << '\n';
 }
 
 /// Observed order of convergence from errors e1 at size s1 and e2 at size s2.
