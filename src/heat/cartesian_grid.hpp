@@ -14,7 +14,7 @@ struct CartesianResolution {
     int cells_across = 10;            ///< cells across the largest bounding-box extent (-)
     int aperture_samples = 8;         ///< sub-squares per cell-face edge for apertures (-)
     double mesh_edge_fraction = 0.25; ///< surface-triangle edge / cell size (-)
-    double merge_fraction = 0.1;      ///< cut cells below this volume fraction join a neighbour (-)
+    double merge_fraction = 0.5;      ///< cut cells below this volume fraction join a neighbour (-)
 };
 
 /// Cell size (m) of `res` for `shape`: the largest bounding-box extent / cells_across.

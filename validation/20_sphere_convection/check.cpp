@@ -25,12 +25,9 @@ constexpr int samples = 4;
 /// steps: spatial error ~ 0.5 (dr/R)^2 ~ 3e-4 at Bi = 1 (more at Bi = 100, where the first sample
 /// at Fo = 0.05 has a steep surface layer) and time error ~ 5e-4.
 constexpr double spherical_tolerance = 2e-3;
-/// Theta error on the Cartesian grid with 16 cells across (h = R/8): a first-order cut-cell
-/// boundary gives errors ~ 0.1 h/R at Bi <= 1.
+/// Theta error on the Cartesian grid with 16 cells across (h = R/8) for every Bi: the cut-cell
+/// boundary (small cells merged below half a cell) converges at about second order, ~0.4 (h/R)^2.
 constexpr double cartesian_tolerance = 1e-2;
-/// Regression guard only, Bi >= 10 on the Cartesian grid: the target above is NOT met there
-/// (measured 1.3e-2 and 1.6e-2, see README); this catches a further degradation.
-constexpr double cartesian_guard = 5e-2;
 /// Observed orders: second order in space (spherical grid, volume mean), first order in time
 /// (backward Euler, last pair of the sequence); the band allows pre-asymptotic behaviour.
 constexpr double space_order_min = 1.7;
@@ -40,8 +37,9 @@ constexpr double centre_order_min = 1.5;
 constexpr double space_order_max = 2.3;
 constexpr double time_order_min = 0.9;
 constexpr double time_order_max = 1.1;
-/// The Cartesian grid's spatial order: at least first (cut cells are first order locally).
-constexpr double cartesian_order_min = 0.9;
+/// The Cartesian grid's spatial order from 8 to 24 cells across (volume mean): at least 1.5
+/// (second order in the interior; cut cells are irregular, so single pairs scatter).
+constexpr double cartesian_order_min = 1.5;
 
 double fo_end(double bi) {
     return std::max(0.2, 1.0 / (3.0 * bi));
@@ -95,7 +93,7 @@ TEST(SphereConvection, BiotSweepOnBothGrids) {
     for (const double bi : {0.01, 0.1, 1.0, 10.0, 100.0}) {
         const Errors es = compare(run(sg, bi, 1600), bi);
         const Errors ec = compare(run(cg, bi, 1600), bi);
-        const double ctol = bi <= 1.0 ? cartesian_tolerance : cartesian_guard;
+        const double ctol = cartesian_tolerance;
         std::printf("  %-6g  %28.2e %9.2e  | %29.2e %9.2e\n", bi, es.centre, es.mean, ec.centre,
                     ec.mean);
         const std::string tag = "Bi=" + std::to_string(bi).substr(0, 6);
