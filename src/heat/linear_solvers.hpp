@@ -15,8 +15,9 @@ namespace kiln::heat {
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
 
 /// The same matrix in a fixed-width row layout for fast products: the diagonal apart, up to
-/// `width` off-diagonal entries per row (padded with zeros), and the rare longer rows' surplus (the
-/// spherical grid's centre cell) as a short list. Built once per operator.
+/// `width` off-diagonal entries per row (padded with zeros, stored slot by slot across rows), and
+/// the rare longer rows' surplus (the spherical grid's centre cell) as a short list. Built once per
+/// operator.
 class EllMatrix {
   public:
     /// Copies `a`; the width is the largest off-diagonal count of a row, capped at 8.
