@@ -128,33 +128,44 @@ double aperture(const Shape& shape, const Layout& g, int axis, const Vec3& corne
     return inside_area * s * s;
 }
 
-} // namespace
+using CellFlags = std::vector<char>;
 
-double cartesian_cell_size(const Shape& shape, const CartesianResolution& res) {
-    return 2.0 * half_extent(shape).maxCoeff() / res.cells_across;
-}
-
-ThermalGrid make_cartesian_grid(const Shape& shape, const CartesianResolution& res) {
-    validate(shape);
-    if (res.cells_across < 2 || res.aperture_samples < 1 || !(res.mesh_edge_fraction > 0.0) ||
-        !(res.merge_fraction >= 0.0 && res.merge_fraction < 1.0)) {
-        throw InputError("heat: Cartesian grid needs cells_across >= 2, aperture_samples >= 1, "
-                         "mesh_edge_fraction > 0 and 0 <= merge_fraction < 1");
-    }
+/// Grid placement: centres on -half + i h, one empty layer beyond each side (step 1).
+Layout make_layout(const Shape& shape, const CartesianResolution& res) {
     const Vec3 half = half_extent(shape);
     Layout g;
-    g.h = cartesian_cell_size(shape, res);
+    g.h = 2.0 * half.maxCoeff() / res.cells_across;
     for (int a = 0; a < 3; ++a) {
-        // Cell centres on -half[a] + i h; one empty layer beyond each side.
         g.n[a] = static_cast<int>(std::ceil(2.0 * half[a] / g.h - 1e-9)) + 3;
         g.lo[a] = -half[a] - 1.5 * g.h;
     }
-    const double h = g.h;
-    const int total = g.count();
+    return g;
+}
 
-    // 2. Surface patches per cell.
-    std::vector<Patch> patch(static_cast<std::size_t>(total));
-    const SurfaceMesh mesh = surface_mesh(shape, res.mesh_edge_fraction * h);
+/// Adds the clipped polygon `poly` (fan-triangulated) to the patch sums of a cell centred at x0.
+void add_polygon(const Polygon& poly, const Vec3& x0, Patch& pc) {
+    for (int f = 1; f + 1 < poly.n; ++f) {
+        const Vec3& a = poly.p[0];
+        const Vec3& b = poly.p[f];
+        const Vec3& c = poly.p[f + 1];
+        const Vec3 an = 0.5 * (b - a).cross(c - a);
+        const double area = an.norm();
+        pc.area += area;
+        pc.area_normal += an;
+        pc.moment += area * (a + b + c) / 3.0;
+        pc.flux += (a - x0).dot(an);
+        // Edge-midpoint rule: exact for the quadratic integrand over each triangle.
+        const Vec3 m1 = 0.5 * (a + b) - x0;
+        const Vec3 m2 = 0.5 * (b + c) - x0;
+        const Vec3 m3 = 0.5 * (c + a) - x0;
+        pc.second += an.cwiseProduct(m1.cwiseAbs2() + m2.cwiseAbs2() + m3.cwiseAbs2()) / 3.0;
+    }
+}
+
+/// Step 2: the surface triangulation clipped against every cell it overlaps.
+std::vector<Patch> clip_surface(const Shape& shape, const Layout& g, double mesh_edge) {
+    std::vector<Patch> patch(static_cast<std::size_t>(g.count()));
+    const SurfaceMesh mesh = surface_mesh(shape, mesh_edge);
     Polygon poly;
     Polygon tmp;
     for (const auto& t : mesh.triangles) {
@@ -167,9 +178,9 @@ ThermalGrid make_cartesian_grid(const Shape& shape, const CartesianResolution& r
         std::array<int, 3> i1{};
         for (int a = 0; a < 3; ++a) {
             i0[a] =
-                std::clamp(static_cast<int>(std::floor((bmin[a] - g.lo[a]) / h)), 0, g.n[a] - 1);
+                std::clamp(static_cast<int>(std::floor((bmin[a] - g.lo[a]) / g.h)), 0, g.n[a] - 1);
             i1[a] =
-                std::clamp(static_cast<int>(std::floor((bmax[a] - g.lo[a]) / h)), 0, g.n[a] - 1);
+                std::clamp(static_cast<int>(std::floor((bmax[a] - g.lo[a]) / g.h)), 0, g.n[a] - 1);
         }
         for (int k = i0[2]; k <= i1[2]; ++k) {
             for (int j = i0[1]; j <= i1[1]; ++j) {
@@ -180,57 +191,42 @@ ThermalGrid make_cartesian_grid(const Shape& shape, const CartesianResolution& r
                     poly.p[2] = p2;
                     const std::array<int, 3> ijk{i, j, k};
                     for (int a = 0; a < 3 && poly.n >= 3; ++a) {
-                        const double lo = g.lo[a] + ijk[a] * h;
+                        const double lo = g.lo[a] + ijk[a] * g.h;
                         clip(poly, a, lo, false, tmp);
-                        clip(tmp, a, lo + h, true, poly);
+                        clip(tmp, a, lo + g.h, true, poly);
                     }
-                    if (poly.n < 3) {
-                        continue;
-                    }
-                    const Vec3 x0 = g.centre(i, j, k);
-                    Patch& pc = patch[static_cast<std::size_t>(g.index(i, j, k))];
-                    for (int f = 1; f + 1 < poly.n; ++f) {
-                        const Vec3& a = poly.p[0];
-                        const Vec3& b = poly.p[f];
-                        const Vec3& c = poly.p[f + 1];
-                        const Vec3 an = 0.5 * (b - a).cross(c - a);
-                        const double area = an.norm();
-                        pc.area += area;
-                        pc.area_normal += an;
-                        pc.moment += area * (a + b + c) / 3.0;
-                        pc.flux += (a - x0).dot(an);
-                        const Vec3 m1 = 0.5 * (a + b) - x0;
-                        const Vec3 m2 = 0.5 * (b + c) - x0;
-                        const Vec3 m3 = 0.5 * (c + a) - x0;
-                        pc.second +=
-                            an.cwiseProduct(m1.cwiseAbs2() + m2.cwiseAbs2() + m3.cwiseAbs2()) / 3.0;
+                    if (poly.n >= 3) {
+                        add_polygon(poly, g.centre(i, j, k),
+                                    patch[static_cast<std::size_t>(g.index(i, j, k))]);
                     }
                 }
             }
         }
     }
+    return patch;
+}
 
-    // Classification: cut (carries surface), inside, outside.
-    std::vector<char> cut(static_cast<std::size_t>(total), 0);
-    std::vector<char> full(static_cast<std::size_t>(total), 0);
-    for (int k = 0; k < g.n[2]; ++k) {
-        for (int j = 0; j < g.n[1]; ++j) {
-            for (int i = 0; i < g.n[0]; ++i) {
-                const int c = g.index(i, j, k);
-                if (patch[static_cast<std::size_t>(c)].area > 0.0) {
-                    cut[static_cast<std::size_t>(c)] = 1;
-                } else if (inside(shape, g.centre(i, j, k))) {
-                    full[static_cast<std::size_t>(c)] = 1;
-                }
-            }
-        }
-    }
-
-    // 3. Apertures: ap[a][c] is the face between c and its +a neighbour.
+/// Apertures: ap[a][c] is the inside area of the face between cell c and its +a neighbour (m^2).
+struct Apertures {
     std::array<std::vector<double>, 3> ap;
-    const std::array<int, 3> stride{1, g.n[0], g.n[0] * g.n[1]};
+    std::array<int, 3> stride{};
+    /// Aperture of the upper (+a) or lower (-a) face of cell c.
+    [[nodiscard]] double face(int a, int c, bool upper) const {
+        if (upper) {
+            return ap[a][static_cast<std::size_t>(c)];
+        }
+        const int d = c - stride[a];
+        return d >= 0 ? ap[a][static_cast<std::size_t>(d)] : 0.0;
+    }
+};
+
+/// Step 3: apertures of every face next to a cut cell; h^2 between full cells.
+Apertures compute_apertures(const Shape& shape, const Layout& g, const CellFlags& cut,
+                            const CellFlags& full, int samples) {
+    Apertures out;
+    out.stride = {1, g.n[0], g.n[0] * g.n[1]};
     for (int a = 0; a < 3; ++a) {
-        ap[a].assign(static_cast<std::size_t>(total), 0.0);
+        out.ap[a].assign(static_cast<std::size_t>(g.count()), 0.0);
         for (int k = 0; k < g.n[2]; ++k) {
             for (int j = 0; j < g.n[1]; ++j) {
                 for (int i = 0; i < g.n[0]; ++i) {
@@ -239,29 +235,28 @@ ThermalGrid make_cartesian_grid(const Shape& shape, const CartesianResolution& r
                         continue;
                     }
                     const auto c = static_cast<std::size_t>(g.index(i, j, k));
-                    const auto d = c + static_cast<std::size_t>(stride[a]);
+                    const auto d = c + static_cast<std::size_t>(out.stride[a]);
                     if (cut[c] || cut[d]) {
-                        Vec3 corner = g.lo + h * Vec3(i, j, k);
-                        corner[a] += h;
-                        ap[a][c] = aperture(shape, g, a, corner, res.aperture_samples);
+                        Vec3 corner = g.lo + g.h * Vec3(i, j, k);
+                        corner[a] += g.h;
+                        out.ap[a][c] = aperture(shape, g, a, corner, samples);
                     } else if (full[c] && full[d]) {
-                        ap[a][c] = h * h;
+                        out.ap[a][c] = g.h * g.h;
                     }
                 }
             }
         }
     }
-    const auto face = [&](int a, int c, bool upper) -> double {
-        if (upper) {
-            return ap[a][static_cast<std::size_t>(c)];
-        }
-        const int d = c - stride[a];
-        return d >= 0 ? ap[a][static_cast<std::size_t>(d)] : 0.0;
-    };
+    return out;
+}
 
-    // 4. Volumes and centroids.
-    std::vector<double> vol(static_cast<std::size_t>(total), 0.0);
-    std::vector<Vec3> node(static_cast<std::size_t>(total), Vec3::Zero());
+/// Step 4: volumes and nodes (centroids) of full and cut cells; zero elsewhere.
+void volumes_and_nodes(const Layout& g, const CellFlags& cut, const CellFlags& full,
+                       const std::vector<Patch>& patch, const Apertures& ap,
+                       std::vector<double>& vol, std::vector<Vec3>& node) {
+    const double h = g.h;
+    vol.assign(static_cast<std::size_t>(g.count()), 0.0);
+    node.assign(static_cast<std::size_t>(g.count()), Vec3::Zero());
     for (int k = 0; k < g.n[2]; ++k) {
         for (int j = 0; j < g.n[1]; ++j) {
             for (int i = 0; i < g.n[0]; ++i) {
@@ -275,8 +270,8 @@ ThermalGrid make_cartesian_grid(const Shape& shape, const CartesianResolution& r
                     double sum = 0.0;
                     Vec3 offset = 0.5 * patch[cs].second;
                     for (int a = 0; a < 3; ++a) {
-                        const double up = face(a, c, true);
-                        const double down = face(a, c, false);
+                        const double up = ap.face(a, c, true);
+                        const double down = ap.face(a, c, false);
                         sum += up + down;
                         offset[a] += h * h / 8.0 * (up - down);
                     }
@@ -287,9 +282,14 @@ ThermalGrid make_cartesian_grid(const Shape& shape, const CartesianResolution& r
             }
         }
     }
+}
 
-    // 5. Merge small cut cells into their best-connected regular neighbour.
-    const double v_small = res.merge_fraction * h * h * h;
+/// Step 5: for each cut cell below `v_small`, the regular face neighbour with the largest shared
+/// aperture it joins (-1: keep).
+std::vector<int> merge_targets(const Layout& g, const CellFlags& cut, const CellFlags& full,
+                               const std::vector<double>& vol, const Apertures& ap,
+                               double v_small) {
+    const int total = g.count();
     std::vector<int> target(static_cast<std::size_t>(total), -1);
     for (int c = 0; c < total; ++c) {
         const auto cs = static_cast<std::size_t>(c);
@@ -299,13 +299,13 @@ ThermalGrid make_cartesian_grid(const Shape& shape, const CartesianResolution& r
         double best = -1.0;
         for (int a = 0; a < 3; ++a) {
             for (const bool upper : {false, true}) {
-                const int d = upper ? c + stride[a] : c - stride[a];
+                const int d = upper ? c + ap.stride[a] : c - ap.stride[a];
                 if (d < 0 || d >= total) {
                     continue;
                 }
                 const auto ds = static_cast<std::size_t>(d);
                 const bool regular = full[ds] || (cut[ds] && vol[ds] >= v_small);
-                const double w = face(a, c, upper);
+                const double w = ap.face(a, c, upper);
                 if (regular && w > best) {
                     best = w;
                     target[cs] = d;
@@ -313,23 +313,15 @@ ThermalGrid make_cartesian_grid(const Shape& shape, const CartesianResolution& r
             }
         }
     }
+    return target;
+}
 
-    // Compact numbering: regular cells first, merged cells share their target's number.
-    std::vector<int> id(static_cast<std::size_t>(total), -1);
-    int count = 0;
-    for (int c = 0; c < total; ++c) {
-        const auto cs = static_cast<std::size_t>(c);
-        if ((full[cs] || cut[cs]) && target[cs] < 0) {
-            id[cs] = count++;
-        }
-    }
-    for (int c = 0; c < total; ++c) {
-        const auto cs = static_cast<std::size_t>(c);
-        if (target[cs] >= 0) {
-            id[cs] = id[static_cast<std::size_t>(target[cs])];
-        }
-    }
-
+/// Step 6: the compact grid: summed volumes, nodes and patches per compact cell, links, patches.
+ThermalGrid assemble(const Layout& g, const std::vector<int>& id, int count,
+                     const std::vector<double>& vol, const std::vector<Vec3>& node,
+                     const std::vector<Patch>& patch, const Apertures& ap) {
+    const double h = g.h;
+    const int total = g.count();
     ThermalGrid out;
     out.kind = "cartesian";
     out.volume.assign(static_cast<std::size_t>(count), 0.0);
@@ -355,8 +347,8 @@ ThermalGrid make_cartesian_grid(const Shape& shape, const CartesianResolution& r
     for (int a = 0; a < 3; ++a) {
         for (int c = 0; c < total; ++c) {
             const auto cs = static_cast<std::size_t>(c);
-            const double w = ap[a][cs];
-            const int d = c + stride[a];
+            const double w = ap.ap[a][cs];
+            const int d = c + ap.stride[a];
             if (w <= 0.0 || d >= total) {
                 continue;
             }
@@ -396,6 +388,62 @@ ThermalGrid make_cartesian_grid(const Shape& shape, const CartesianResolution& r
         g.index(static_cast<int>(rel.x()), static_cast<int>(rel.y()), static_cast<int>(rel.z()));
     out.centre_cell = std::max(0, id[static_cast<std::size_t>(c0)]);
     return out;
+}
+
+} // namespace
+
+double cartesian_cell_size(const Shape& shape, const CartesianResolution& res) {
+    return 2.0 * half_extent(shape).maxCoeff() / res.cells_across;
+}
+
+ThermalGrid make_cartesian_grid(const Shape& shape, const CartesianResolution& res) {
+    validate(shape);
+    if (res.cells_across < 2 || res.aperture_samples < 1 || !(res.mesh_edge_fraction > 0.0) ||
+        !(res.merge_fraction >= 0.0 && res.merge_fraction < 1.0)) {
+        throw InputError("heat: Cartesian grid needs cells_across >= 2, aperture_samples >= 1, "
+                         "mesh_edge_fraction > 0 and 0 <= merge_fraction < 1");
+    }
+    const Layout g = make_layout(shape, res);
+    const double h = g.h;
+    const int total = g.count();
+    const std::vector<Patch> patch = clip_surface(shape, g, res.mesh_edge_fraction * h);
+
+    // Classification: cut (carries surface), inside, outside.
+    CellFlags cut(static_cast<std::size_t>(total), 0);
+    CellFlags full(static_cast<std::size_t>(total), 0);
+    for (int k = 0; k < g.n[2]; ++k) {
+        for (int j = 0; j < g.n[1]; ++j) {
+            for (int i = 0; i < g.n[0]; ++i) {
+                const auto c = static_cast<std::size_t>(g.index(i, j, k));
+                if (patch[c].area > 0.0) {
+                    cut[c] = 1;
+                } else if (inside(shape, g.centre(i, j, k))) {
+                    full[c] = 1;
+                }
+            }
+        }
+    }
+    const Apertures ap = compute_apertures(shape, g, cut, full, res.aperture_samples);
+    std::vector<double> vol;
+    std::vector<Vec3> node;
+    volumes_and_nodes(g, cut, full, patch, ap, vol, node);
+    const std::vector<int> target =
+        merge_targets(g, cut, full, vol, ap, res.merge_fraction * h * h * h);
+
+    // Compact numbering: regular cells first, merged cells share their target's number.
+    std::vector<int> id(static_cast<std::size_t>(total), -1);
+    int count = 0;
+    for (std::size_t c = 0; c < id.size(); ++c) {
+        if ((full[c] || cut[c]) && target[c] < 0) {
+            id[c] = count++;
+        }
+    }
+    for (std::size_t c = 0; c < id.size(); ++c) {
+        if (target[c] >= 0) {
+            id[c] = id[static_cast<std::size_t>(target[c])];
+        }
+    }
+    return assemble(g, id, count, vol, node, patch, ap);
 }
 
 } // namespace kiln::heat
