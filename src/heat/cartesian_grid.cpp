@@ -306,7 +306,10 @@ std::vector<int> merge_targets(const Layout& g, const CellFlags& cut, const Cell
                 const auto ds = static_cast<std::size_t>(d);
                 const bool regular = full[ds] || (cut[ds] && vol[ds] >= v_small);
                 const double w = ap.face(a, c, upper);
-                if (regular && w > best) {
+                // Apertures equal to rounding (mirror images) keep the first axis in x, y, z order,
+                // so the choice does not depend on round-off and mirror-symmetric shapes get
+                // mirror-symmetric grids.
+                if (regular && w > best * (1.0 + 1e-9) + 1e-300) {
                     best = w;
                     target[cs] = d;
                 }

@@ -21,12 +21,17 @@ void* operator new(std::size_t n) {
     }
     throw std::bad_alloc();
 }
+// The replacement pair is malloc/free by construction; GCC 12 (RelWithDebInfo) misreads the
+// replaced operator new inlined here as a mismatch.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
 void operator delete(void* p) noexcept {
     std::free(p);
 }
 void operator delete(void* p, std::size_t) noexcept {
     std::free(p);
 }
+#pragma GCC diagnostic pop
 
 namespace kiln::heat {
 namespace {
