@@ -175,6 +175,24 @@ StepReport ResolvedOperator::step(std::span<double> temperature, const BoundaryL
     return rep;
 }
 
+void ResolvedOperator::surface_temperature(std::span<const double> temperature,
+                                           const BoundaryLoad& load, std::span<double> out) const {
+    const ThermalGrid& g = *grid_;
+    KILN_ASSERT(out.size() == g.boundary.size());
+    for (std::size_t f = 0; f < g.boundary.size(); ++f) {
+        const BoundaryFace& b = g.boundary[f];
+        const double t_node = temperature[static_cast<std::size_t>(b.cell)];
+        const double t_inf =
+            load.ambient_per_face.empty() ? load.ambient : load.ambient_per_face[f];
+        double q = load.flux + (load.flux_per_face.empty() ? 0.0 : load.flux_per_face[f]);
+        double w = g_surface_[f] * (t_inf - t_node) + q * b.area;
+        if (!load.heat_rate.empty()) {
+            w += load.heat_rate[f];
+        }
+        out[f] = t_node + w * b.distance / (props_.conductivity * b.area);
+    }
+}
+
 double mean_temperature(const ThermalGrid& grid, std::span<const double> t) {
     double sum = 0.0;
     double vol = 0.0;

@@ -86,6 +86,12 @@ class ResolvedOperator {
     /// initial guess of iterative solvers. Allocation-free.
     StepReport step(std::span<double> temperature, const BoundaryLoad& load);
 
+    /// Surface temperature of every boundary patch (K) after a step, from the node-to-surface
+    /// split of the patch's heat rate: T_s = T_node + (G_b (T_inf - T_node) + q A + Q) d / (k A)
+    /// (T_node where d = 0). `out` has one entry per patch. For output and contact temperatures.
+    void surface_temperature(std::span<const double> temperature, const BoundaryLoad& load,
+                             std::span<double> out) const;
+
     /// The grid (body frame).
     [[nodiscard]] const ThermalGrid& grid() const { return *grid_; }
     /// Time step (s).

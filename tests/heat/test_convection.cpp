@@ -1,6 +1,7 @@
 // Stagnation-point distribution of h and its lagged application.
 
 #include "heat/convection.hpp"
+#include "heat/heat_model.hpp"
 #include "heat/resolved_model.hpp"
 #include "heat/spherical_grid.hpp"
 
@@ -61,6 +62,38 @@ TEST(Convection, LaggedCoefficientConvergesToTheImplicitOneAtFirstOrder) {
     // First order in dt: halving dt halves the lag error; band [1.6, 2.4] for the ratio.
     EXPECT_NEAR(d1 / d2, 2.0, 0.4);
     EXPECT_NEAR(d2 / d3, 2.0, 0.4);
+}
+
+TEST(Convection, SurfaceTemperatureSitsBetweenNodeAndFluid) {
+    const auto g = std::make_shared<const ThermalGrid>(make_spherical_grid(0.01, {4, 4, 8}));
+    const std::vector<double> h{500.0};
+    ResolvedOperator op(g, {1.0, 2000.0, 1000.0}, 1.0, h, {});
+    std::vector<double> t(static_cast<std::size_t>(g->size()), 300.0);
+    const BoundaryLoad load{.ambient = 400.0};
+    (void)op.step(t, load);
+    std::vector<double> ts(g->boundary.size());
+    op.surface_temperature(t, load, ts);
+    for (std::size_t f = 0; f < ts.size(); ++f) {
+        const double node = t[static_cast<std::size_t>(g->boundary[f].cell)];
+        EXPECT_GT(ts[f], node);
+        EXPECT_LT(ts[f], 400.0);
+        // Flux continuity: k (T_s - T_node)/d = h (T_inf - T_s).
+        const double d = g->boundary[f].distance;
+        EXPECT_NEAR(1.0 * (ts[f] - node) / d, 500.0 * (400.0 - ts[f]), 1e-9 * 500.0 * 100.0);
+    }
+}
+
+TEST(HeatModelChoice, AutoPicksLumpedBelowTheBiotThreshold) {
+    // Sphere: L_c = R/3.
+    const double r = 0.003;
+    const double v = 4.0 / 3.0 * 3.14159265358979 * r * r * r;
+    const double a = 4.0 * 3.14159265358979 * r * r;
+    EXPECT_NEAR(biot_number(100.0, v, a, 1.0), 100.0 * r / 3.0, 1e-12);
+    EXPECT_EQ(choose_model(HeatModel::automatic, 0.05), HeatModel::lumped);
+    EXPECT_EQ(choose_model(HeatModel::automatic, 0.2), HeatModel::resolved);
+    EXPECT_EQ(choose_model(HeatModel::resolved, 1e-6), HeatModel::resolved);
+    EXPECT_EQ(choose_model(HeatModel::none, 5.0), HeatModel::none);
+    EXPECT_EQ(to_string(HeatModel::automatic), "auto");
 }
 
 } // namespace
