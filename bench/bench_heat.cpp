@@ -41,15 +41,16 @@ double step_for(double fo) {
 }
 
 void run(benchmark::State& state, const std::shared_ptr<const ThermalGrid>& g, SolverKind kind,
-         double fo) {
+         double fo, bool extrapolate = false) {
     const std::vector<double> h{500.0};
     ResolvedOperator op(g, props, step_for(fo), h, {kind, 1e-8, 1000});
     std::vector<double> t(static_cast<std::size_t>(g->size()), 300.0);
+    std::vector<double> previous(extrapolate ? t.size() : 0, 300.0);
     long s = 0;
     for (auto _ : state) {
         const double ambient =
             400.0 + 50.0 * std::sin(2.0 * 3.14159265 * static_cast<double>(s) / 200.0);
-        const StepReport r = op.step(t, {.ambient = ambient});
+        const StepReport r = op.step(t, {.ambient = ambient}, previous);
         benchmark::DoNotOptimize(r);
         ++s;
     }
@@ -76,7 +77,20 @@ void BM_SphereCG_Fo003(benchmark::State& s) {
 void BM_SphereBiCGSTAB_Fo003(benchmark::State& s) {
     run(s, sphere_grid(), SolverKind::bicgstab, 0.03);
 }
+/// With the time-extrapolated initial guess (a second field per particle).
+void BM_CubeCGExtrapolated_Fo003(benchmark::State& s) {
+    run(s, cube_grid(), SolverKind::cg, 0.03, true);
+}
+void BM_CubeBiCGSTABExtrapolated_Fo003(benchmark::State& s) {
+    run(s, cube_grid(), SolverKind::bicgstab, 0.03, true);
+}
+void BM_CubeCGExtrapolated_Fo3(benchmark::State& s) {
+    run(s, cube_grid(), SolverKind::cg, 3.0, true);
+}
 BENCHMARK(BM_CubeCG_Fo003);
+BENCHMARK(BM_CubeCGExtrapolated_Fo003);
+BENCHMARK(BM_CubeBiCGSTABExtrapolated_Fo003);
+BENCHMARK(BM_CubeCGExtrapolated_Fo3);
 BENCHMARK(BM_CubeBiCGSTAB_Fo003);
 BENCHMARK(BM_CubeCG_Fo3);
 BENCHMARK(BM_CubeBiCGSTAB_Fo3);

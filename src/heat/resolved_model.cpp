@@ -110,7 +110,8 @@ double ResolvedOperator::total_capacity() const {
     return c;
 }
 
-StepReport ResolvedOperator::step(std::span<double> temperature, const BoundaryLoad& load) {
+StepReport ResolvedOperator::step(std::span<double> temperature, const BoundaryLoad& load,
+                                  std::span<double> previous) {
     const ThermalGrid& g = *grid_;
     const int n = g.size();
     KILN_ASSERT(static_cast<int>(temperature.size()) == n);
@@ -123,6 +124,15 @@ StepReport ResolvedOperator::step(std::span<double> temperature, const BoundaryL
         rhs_[i] = capacity_[static_cast<std::size_t>(i)] * inv_dt *
                   temperature[static_cast<std::size_t>(i)];
         x_[i] = temperature[static_cast<std::size_t>(i)];
+    }
+    if (!previous.empty()) {
+        // Initial guess extrapolated linearly in time; `previous` becomes T^n.
+        KILN_ASSERT(static_cast<int>(previous.size()) == n);
+        for (int i = 0; i < n; ++i) {
+            const auto si = static_cast<std::size_t>(i);
+            x_[i] = 2.0 * temperature[si] - previous[si];
+            previous[si] = temperature[si];
+        }
     }
     double explicit_in = 0.0; // W through flux and heat-rate terms
     for (std::size_t f = 0; f < nb; ++f) {

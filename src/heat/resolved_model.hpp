@@ -83,8 +83,12 @@ class ResolvedOperator {
     ResolvedOperator& operator=(const ResolvedOperator&) = delete;
 
     /// Advances `temperature` (K, one value per cell) by one step dt; the old field is the
-    /// initial guess of iterative solvers. Allocation-free.
-    StepReport step(std::span<double> temperature, const BoundaryLoad& load);
+    /// initial guess of iterative solvers. If `previous` (K, the field one step earlier) is given,
+    /// the guess is extrapolated linearly, 2 T^n - T^{n-1}, and `previous` is overwritten with T^n
+    /// (costs a second field per particle, saves iterations when the field changes smoothly).
+    /// Allocation-free.
+    StepReport step(std::span<double> temperature, const BoundaryLoad& load,
+                    std::span<double> previous = {});
 
     /// Surface temperature of every boundary patch (K) after a step, from the node-to-surface
     /// split of the patch's heat rate: T_s = T_node + (G_b (T_inf - T_node) + q A + Q) d / (k A)
