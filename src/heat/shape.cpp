@@ -12,6 +12,8 @@ namespace kiln::heat {
 namespace {
 
 template <class... F> struct Overloaded : F... { using F::operator()...; };
+/// Deduction guide (implicit for aggregates in C++20, but clang 14 still needs it).
+template <class... F> Overloaded(F...) -> Overloaded<F...>;
 
 /// Superquadric radial function f(x) = G(x)^(e1/2), homogeneous of degree one: f(t x) = t f(x),
 /// f = 1 on the surface (G is Barr's inside-outside function).
@@ -30,8 +32,9 @@ double beta(double a, double b) {
 /// Cube [-1,1]^3 surface as quads split into triangles, n x n quads per face, outward oriented.
 SurfaceMesh unit_cube_mesh(int n) {
     SurfaceMesh m;
-    m.vertices.reserve(static_cast<std::size_t>(6 * (n + 1) * (n + 1)));
-    m.triangles.reserve(static_cast<std::size_t>(12 * n * n));
+    const auto quads = static_cast<std::size_t>(n);
+    m.vertices.reserve(6 * (quads + 1) * (quads + 1));
+    m.triangles.reserve(12 * quads * quads);
     for (int axis = 0; axis < 3; ++axis) {
         const int u = (axis + 1) % 3;
         const int v = (axis + 2) % 3;

@@ -35,8 +35,7 @@ Vec3 spherical_point(double r, double theta, double phi) {
 Vec3 unit_patch_normal(double t0, double t1, double p0, double p1) {
     const double s2 = (t1 - t0) / 2.0 - (std::sin(2.0 * t1) - std::sin(2.0 * t0)) / 4.0;
     const double sc = (std::sin(t1) * std::sin(t1) - std::sin(t0) * std::sin(t0)) / 2.0;
-    return Vec3(s2 * (std::sin(p1) - std::sin(p0)), s2 * (std::cos(p0) - std::cos(p1)),
-                sc * (p1 - p0));
+    return {s2 * (std::sin(p1) - std::sin(p0)), s2 * (std::cos(p0) - std::cos(p1)), sc * (p1 - p0)};
 }
 
 } // namespace

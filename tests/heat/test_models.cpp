@@ -28,7 +28,7 @@ std::vector<SolverKind> solvers() {
     return s;
 }
 
-void expect_energy_balance(std::shared_ptr<const ThermalGrid> grid, SolverKind kind) {
+void expect_energy_balance(const std::shared_ptr<const ThermalGrid>& grid, SolverKind kind) {
     const double q = 1e4; // W/m^2
     const double dt = 0.5;
     const std::vector<double> no_h;
