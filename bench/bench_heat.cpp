@@ -133,4 +133,36 @@ void BM_SuperquadricGridBuild(benchmark::State& state) {
 }
 BENCHMARK(BM_SuperquadricGridBuild)->Unit(benchmark::kMillisecond);
 
+/// Speed/accuracy trade on the set-up of validation 20 (glass sphere R = 50 mm, Bi = 1,
+/// dt = t_end/400 with t_end at Fo = 1/3): cost per step of each grid whose error that case
+/// reports. Arguments: grid kind (0 spherical n_r x 4 x 8, 1 Cartesian), resolution, solver.
+void BM_SphereTradeoff(benchmark::State& state) {
+    const ThermalProperties glass{1.4, 2225.0, 835.0};
+    const double r = 0.05;
+    const int res = static_cast<int>(state.range(1));
+    const auto g = state.range(0) == 0
+                       ? std::make_shared<const ThermalGrid>(make_spherical_grid(r, {res, 4, 8}))
+                       : std::make_shared<const ThermalGrid>(
+                             make_cartesian_grid(Sphere{r}, {.cells_across = res}));
+    const SolverKind kind = state.range(2) == 0 ? SolverKind::cg : SolverKind::cholmod;
+    if (kind == SolverKind::cholmod && !cholmod_available()) {
+        state.SkipWithError("no CHOLMOD");
+        return;
+    }
+    const double dt = (1.0 / 3.0) * r * r / glass.diffusivity() / 400.0;
+    const std::vector<double> h{1.0 * glass.conductivity / r};
+    ResolvedOperator op(g, glass, dt, h, {kind, 1e-10, 5000});
+    std::vector<double> t(static_cast<std::size_t>(g->size()), 1.0);
+    for (auto _ : state) {
+        benchmark::DoNotOptimize(op.step(t, {.ambient = 0.0}));
+    }
+    state.counters["cells"] = g->size();
+    state.counters["iters/step"] =
+        static_cast<double>(op.total_iterations()) / static_cast<double>(op.total_solves());
+}
+BENCHMARK(BM_SphereTradeoff)
+    ->ArgsProduct({{0}, {5, 10, 20, 40}, {0, 1}})
+    ->ArgsProduct({{1}, {8, 12, 16, 24}, {0, 1}})
+    ->Unit(benchmark::kMicrosecond);
+
 } // namespace
