@@ -1,11 +1,15 @@
 #include "heat/cholmod_solver.hpp"
 
+#if KILN_HAVE_CHOLMOD
 #include <cholmod.h>
+#endif
 #include <cstring>
 #include <stdexcept>
 #include <vector>
 
 namespace kiln::heat {
+
+#if KILN_HAVE_CHOLMOD
 
 struct CholmodFactor::Impl {
     cholmod_common common{};
@@ -84,5 +88,22 @@ void CholmodFactor::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
     cholmod_solve2(CHOLMOD_A, m.factor, &m.b, nullptr, &m.x, nullptr, &m.y, &m.e, &m.common);
     std::memcpy(x.data(), m.x->x, static_cast<std::size_t>(m.n) * sizeof(double));
 }
+
+#else
+
+// Built without CHOLMOD: ResolvedOperator refuses SolverKind::cholmod with an InputError before it
+// would construct a factor; these definitions only complete the type.
+struct CholmodFactor::Impl {};
+
+CholmodFactor::CholmodFactor(const SparseMatrix& /*a*/) {
+    throw std::logic_error("heat: kiln was built without CHOLMOD");
+}
+
+CholmodFactor::~CholmodFactor() = default;
+
+void CholmodFactor::solve(const Eigen::VectorXd& /*b*/, Eigen::VectorXd& /*x*/) {
+}
+
+#endif
 
 } // namespace kiln::heat

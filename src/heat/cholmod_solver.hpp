@@ -3,7 +3,7 @@
 // SPD heat matrix is analysed and factorised once (simplicial LDL', which limits.md Part B
 // measured 2x faster than supernodal at ~1000 unknowns); each solve then reuses CHOLMOD's
 // output and work buffers, so no allocation happens after the first solve.
-// Only compiled when CHOLMOD is found (KILN_HAVE_CHOLMOD).
+// Without CHOLMOD (KILN_HAVE_CHOLMOD = 0) the class exists but cannot be constructed.
 
 #include "heat/linear_solvers.hpp"
 

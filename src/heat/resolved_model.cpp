@@ -1,10 +1,8 @@
 #include "heat/resolved_model.hpp"
 
 #include "core/error.hpp"
-#include "heat/convection.hpp"
-#if KILN_HAVE_CHOLMOD
 #include "heat/cholmod_solver.hpp"
-#endif
+#include "heat/convection.hpp"
 
 #include <string>
 #include <vector>
