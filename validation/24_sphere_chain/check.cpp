@@ -30,7 +30,7 @@ constexpr double heat_flow = 0.1569;                     // W, in at P1, out at 
 constexpr double t_initial = 398.15;                     // K
 constexpr double dt = 0.1;                               // s (seed L1983)
 constexpr double t_end = 6000.0;                         // s
-constexpr double seed_p1 = 427.0;                        // K, read from Fig. 11a (text L2077)
+constexpr double seed_p1 = 427.0;                        // K, read from Fig. 11a (text L2080)
 constexpr double seed_p3 = 377.0;                        // K
 const heat::SphericalResolution resolution{8, 16, 8};
 
