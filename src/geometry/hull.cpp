@@ -35,24 +35,27 @@ template <class F> std::size_t farthest(const std::vector<Vec3>& pts, F&& dist, 
 /// Refuses input without four affinely independent points (relative to its extent).
 void check_not_flat(const std::vector<Vec3>& pts, const std::string& where) {
     if (pts.size() < 4) {
-        throw InputError(fmt::format(
-            "{}: a polyhedron needs at least 4 points, the input has {}", where, pts.size()));
+        throw InputError(fmt::format("{}: a polyhedron needs at least 4 points, the input has {}",
+                                     where, pts.size()));
     }
     double d = 0.0;
-    const Vec3 p0 = pts[farthest(pts, [&](const Vec3& p) { return (p - pts[0]).norm(); }, d)];
-    const Vec3 p1 = pts[farthest(pts, [&](const Vec3& p) { return (p - p0).norm(); }, d)];
+    const Vec3 p0 = pts[farthest(
+        pts, [&](const Vec3& p) { return (p - pts[0]).norm(); }, d)];
+    const Vec3 p1 = pts[farthest(
+        pts, [&](const Vec3& p) { return (p - p0).norm(); }, d)];
     const double extent = d;
     if (!(extent > 0.0)) {
         throw InputError(fmt::format("{}: all {} points coincide", where, pts.size()));
     }
     const Vec3 u = (p1 - p0) / extent;
-    const Vec3 p2 =
-        pts[farthest(pts, [&](const Vec3& p) { return (p - p0).cross(u).norm(); }, d)];
+    const Vec3 p2 = pts[farthest(
+        pts, [&](const Vec3& p) { return (p - p0).cross(u).norm(); }, d)];
     if (d <= kHullFlatTolerance * extent) {
         throw InputError(fmt::format("{}: the points are collinear (no volume)", where));
     }
     const Vec3 n = u.cross(p2 - p0).normalized();
-    (void)farthest(pts, [&](const Vec3& p) { return std::abs((p - p0).dot(n)); }, d);
+    (void)farthest(
+        pts, [&](const Vec3& p) { return std::abs((p - p0).dot(n)); }, d);
     if (d <= kHullFlatTolerance * extent) {
         throw InputError(fmt::format(
             "{}: the points are coplanar (flat, no volume; largest distance from their plane "

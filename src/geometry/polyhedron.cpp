@@ -71,8 +71,8 @@ MassProperties polyhedron_mass_properties(const std::vector<Vec3>& vertices,
         o += v;
     }
     o /= static_cast<double>(std::max<std::size_t>(vertices.size(), 1));
-    double vol6 = 0.0;           // 6 V
-    Vec3 first24 = Vec3::Zero(); // 24 int x dV
+    double vol6 = 0.0;             // 6 V
+    Vec3 first24 = Vec3::Zero();   // 24 int x dV
     Mat3 second120 = Mat3::Zero(); // 120 int x x^T dV
     for (const auto& f : faces) {
         const Vec3 a = vertices[static_cast<std::size_t>(f[0])] - o;
@@ -84,8 +84,8 @@ MassProperties polyhedron_mass_properties(const std::vector<Vec3>& vertices,
         first24 += det * s;
         // Tonon (2004): int x x^T over the tetrahedron with one vertex at the origin is
         // det/120 (a a^T + b b^T + c c^T + s s^T).
-        second120 += det * (a * a.transpose() + b * b.transpose() + c * c.transpose() +
-                            s * s.transpose());
+        second120 +=
+            det * (a * a.transpose() + b * b.transpose() + c * c.transpose() + s * s.transpose());
     }
     MassProperties m;
     m.volume = vol6 / 6.0;
@@ -104,8 +104,8 @@ ConvexPolyhedron make_polyhedron(const std::vector<Vec3>& vertices,
                                  const std::string& where) {
     const int nv = static_cast<int>(vertices.size());
     if (faces.size() < 4) {
-        throw InputError(fmt::format("{}: a polyhedron needs at least 4 faces, got {}", where,
-                                     faces.size()));
+        throw InputError(
+            fmt::format("{}: a polyhedron needs at least 4 faces, got {}", where, faces.size()));
     }
     // Closed and consistently oriented: every directed edge once, and its reverse once.
     std::map<std::array<int, 2>, int> directed;

@@ -17,13 +17,13 @@ namespace kiln::geometry {
 
 /// Convex polyhedron in its body frame (principal axes, origin at the centre of mass).
 struct ConvexPolyhedron {
-    std::vector<Vec3> vertices;                ///< vertex positions (m), body frame
-    std::vector<std::array<int, 3>> faces;     ///< triangles, outward (counter-clockwise) order
-    std::vector<std::array<int, 2>> edges;     ///< unique edges of the triangles (lower index first)
-    double volume = 0.0;                       ///< volume (m^3)
-    Vec3 inertia_unit_density = Vec3::Zero();  ///< principal moments per unit density (m^5)
-    Mat3 template_axes = Mat3::Identity();     ///< v_body = R^T (v_input - c), R = template_axes
-    Vec3 template_centroid = Vec3::Zero();     ///< centre of mass in the input frame (m)
+    std::vector<Vec3> vertices;               ///< vertex positions (m), body frame
+    std::vector<std::array<int, 3>> faces;    ///< triangles, outward (counter-clockwise) order
+    std::vector<std::array<int, 2>> edges;    ///< unique edges of the triangles (lower index first)
+    double volume = 0.0;                      ///< volume (m^3)
+    Vec3 inertia_unit_density = Vec3::Zero(); ///< principal moments per unit density (m^5)
+    Mat3 template_axes = Mat3::Identity();    ///< v_body = R^T (v_input - c), R = template_axes
+    Vec3 template_centroid = Vec3::Zero();    ///< centre of mass in the input frame (m)
 
     /// Support point: the vertex maximising d . x for a body-frame direction d (m, body frame).
     [[nodiscard]] Vec3 support(const Vec3& d_body) const;
@@ -38,8 +38,9 @@ struct ConvexPolyhedron {
 
 /// Volume, centroid and centroidal inertia per unit density of a closed, outward-oriented triangle
 /// mesh (any frame). Exact up to round-off; the mesh need not be convex.
-[[nodiscard]] MassProperties polyhedron_mass_properties(const std::vector<Vec3>& vertices,
-                                                        const std::vector<std::array<int, 3>>& faces);
+[[nodiscard]] MassProperties
+polyhedron_mass_properties(const std::vector<Vec3>& vertices,
+                           const std::vector<std::array<int, 3>>& faces);
 
 /// Builds a polyhedron from the triangles of a convex hull (outward orientation) given in any
 /// frame: checks that every edge is shared by exactly two triangles in opposite directions and

@@ -44,7 +44,7 @@ struct ShapeTemplate {
     double volume = 0.0; ///< solid volume (m^3)
     Vec3 inertia_unit_density = Vec3::Zero(); ///< principal moments per unit density (m^5)
     ReferenceSolid reference;                 ///< solid it approximates, kind "none" if any
-    bool density_correction = false; ///< scale the density so mass = rho * reference volume
+    bool density_correction = false;   ///< scale the density so mass = rho * reference volume
     std::vector<std::string> warnings; ///< reader notes, e.g. non-convex input replaced by its hull
 
     /// Factor applied to the material density: reference.volume() / volume with the density

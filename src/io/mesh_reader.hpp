@@ -1,6 +1,7 @@
 #pragma once
 // Surface mesh files for polyhedron templates: Wavefront .obj (v and f records) and STL (ASCII and
-// binary). Only the points and triangles are read; the hull and mass properties are kiln::geometry's.
+// binary). Only the points and triangles are read; the hull and mass properties are
+// kiln::geometry's.
 
 #include "core/types.hpp"
 

@@ -278,7 +278,8 @@ geometry::ShapeTemplate read_shape_text(const std::string& text, const std::stri
                          std::string("TOML syntax error: ") + std::string(e.description()));
     }
     Reader root(name, doc, "");
-    const std::string kind = root.string("kind", "", {"sphere", "clump", "superquadric", "polyhedron"});
+    const std::string kind =
+        root.string("kind", "", {"sphere", "clump", "superquadric", "polyhedron"});
     (void)root.string("description", "-", {});
     const std::string stem = std::filesystem::path(name).stem().string();
     geometry::ShapeTemplate t;
