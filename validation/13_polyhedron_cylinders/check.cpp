@@ -33,12 +33,15 @@ void check_mass(const std::string& name, double volume, Vec3 moments) {
     std::sort(moments.begin(), moments.end());
     record(name + " volume", t.volume, volume, closed_form_tolerance, "m^3");
     EXPECT_NEAR(t.volume / volume - 1.0, 0.0, closed_form_tolerance) << name;
+    double worst = std::abs(t.volume / volume - 1.0);
     for (int k = 0; k < 3; ++k) {
         record(name + " moment " + std::to_string(k), t.inertia_unit_density[k], moments[k],
                closed_form_tolerance, "m^5");
         EXPECT_NEAR(t.inertia_unit_density[k] / moments[k] - 1.0, 0.0, closed_form_tolerance)
             << name << " moment " << k;
+        worst = std::max(worst, std::abs(t.inertia_unit_density[k] / moments[k] - 1.0));
     }
+    record(name + " largest relative deviation", worst, 0.0, closed_form_tolerance, "-");
 }
 
 /// Principal moments per unit density of a box with edges e (m^5).
