@@ -131,6 +131,16 @@ ConvexPolyhedron make_polyhedron(const std::vector<Vec3>& vertices,
             p.edges.push_back(e);
         }
     }
+    // Every vertex on a face: a stray point would enter the support map but not the volume.
+    std::vector<bool> used(vertices.size(), false);
+    for (const auto& f : faces) {
+        for (const int k : f) {
+            used[static_cast<std::size_t>(k)] = true;
+        }
+    }
+    if (const auto it = std::find(used.begin(), used.end(), false); it != used.end()) {
+        throw InputError(fmt::format("{}: vertex {} belongs to no face", where, it - used.begin()));
+    }
     const MassProperties m = polyhedron_mass_properties(vertices, faces);
     if (!(m.volume > 0.0)) {
         throw InputError(

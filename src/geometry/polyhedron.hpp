@@ -1,10 +1,10 @@
 #pragma once
 // Convex polyhedron: a closed triangle mesh with outward (counter-clockwise seen from outside)
 // faces. Mass properties by the divergence theorem, written as a sum of signed tetrahedra spanned
-// by each face and a reference point (Mirtich, J. Graphics Tools 1 (1996) 31, Sec. 2; closed-form
-// tetrahedron moments after Tonon, J. Math. Stat. 1 (2004) 8, Eqs. 2-7). The template is moved to
-// its centre of mass and principal axes like the clumps. The hull of arbitrary input points is
-// built by kiln_hull (CGAL), which is kept out of this library.
+// by each face and a reference point (Mirtich, J. Graphics Tools 1 (1996) 31; closed-form
+// tetrahedron moments after Tonon, J. Math. Stat. 1 (2004) 8; equation numbers not checked against
+// the papers). The template is moved to its centre of mass and principal axes like the clumps. The
+// hull of arbitrary input points is built by kiln_hull (CGAL), which is kept out of this library.
 
 #include "core/types.hpp"
 #include "geometry/mass_properties.hpp"
@@ -43,9 +43,9 @@ polyhedron_mass_properties(const std::vector<Vec3>& vertices,
                            const std::vector<std::array<int, 3>>& faces);
 
 /// Builds a polyhedron from the triangles of a convex hull (outward orientation) given in any
-/// frame: checks that every edge is shared by exactly two triangles in opposite directions and
-/// that the volume is positive, then moves it to the principal frame at the centre of mass.
-/// Throws kiln::InputError prefixed by `where` otherwise.
+/// frame: checks that every vertex is on a face, that every edge is shared by exactly two triangles
+/// in opposite directions and that the volume is positive, then moves it to the principal frame at
+/// the centre of mass. Throws kiln::InputError prefixed by `where` otherwise.
 [[nodiscard]] ConvexPolyhedron make_polyhedron(const std::vector<Vec3>& vertices,
                                                const std::vector<std::array<int, 3>>& faces,
                                                const std::string& where);

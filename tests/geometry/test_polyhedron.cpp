@@ -205,4 +205,8 @@ TEST(Polyhedron, DegenerateInputIsRefused) {
     }
     ASSERT_EQ(open.size(), 10U);
     EXPECT_THROW((void)g::make_polyhedron(h.vertices, open, "open"), kiln::InputError);
+    // A vertex on no face is refused too (it would enter the support map but not the volume).
+    std::vector<Vec3> stray = h.vertices;
+    stray.push_back(Vec3(5.0, 0.0, 0.0));
+    EXPECT_THROW((void)g::make_polyhedron(stray, h.faces, "stray"), kiln::InputError);
 }
