@@ -22,6 +22,13 @@ int print_shape_info(const std::string& shape, double density, const std::string
                    "estimate {:.2e} m^3 ({:.1e} relative)\n",
                    c->spheres.size(), c->volume_error, c->volume_error / c->volume);
     }
+    if (const auto* p = std::get_if<geometry::ConvexPolyhedron>(&t.shape)) {
+        fmt::print("polyhedron        {} vertices, {} triangles, {} edges (convex hull)\n",
+                   p->vertices.size(), p->faces.size(), p->edges.size());
+    }
+    for (const std::string& w : t.warnings) {
+        fmt::print(stderr, "kiln: warning: {}\n", w);
+    }
     fmt::print("volume            {:.6e} m^3\n", t.volume);
     if (t.reference.kind != "none") {
         fmt::print("reference solid   {} of volume {:.6e} m^3; captured volume fraction {:.4f} %\n",

@@ -17,7 +17,8 @@ template <class... Ts> struct Overloaded : Ts... { using Ts::operator()...; };
 const char* kind_name(const Shape& s) {
     return std::visit(Overloaded{[](const Sphere&) { return "sphere"; },
                                  [](const Clump&) { return "clump"; },
-                                 [](const Superquadric&) { return "superquadric"; }},
+                                 [](const Superquadric&) { return "superquadric"; },
+                                 [](const ConvexPolyhedron&) { return "polyhedron"; }},
                       s);
 }
 
@@ -44,7 +45,8 @@ double ShapeTemplate::density_factor() const {
 double ShapeTemplate::bounding_radius() const {
     return std::visit(Overloaded{[](const Sphere& s) { return s.radius; },
                                  [](const Clump& c) { return c.bounding_radius(); },
-                                 [](const Superquadric& q) { return q.bounding_radius(); }},
+                                 [](const Superquadric& q) { return q.bounding_radius(); },
+                                 [](const ConvexPolyhedron& p) { return p.bounding_radius(); }},
                       shape);
 }
 
@@ -65,6 +67,10 @@ ShapeTemplate make_template(std::string name, Shape shape) {
                           [&](const Superquadric& q) {
                               t.volume = q.volume();
                               t.inertia_unit_density = q.inertia_unit_density();
+                          },
+                          [&](const ConvexPolyhedron& p) {
+                              t.volume = p.volume;
+                              t.inertia_unit_density = p.inertia_unit_density;
                           }},
                shape);
     t.shape = std::move(shape);

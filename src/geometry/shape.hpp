@@ -2,11 +2,11 @@
 // The closed set of particle shapes and the named templates built from them.
 //
 // A template is a shape in its body frame (principal axes, origin at the centre of mass) with its
-// mass properties computed from the geometry (never typed in). ConvexPolyhedron joins the variant
-// with the polyhedra issue.
+// mass properties computed from the geometry (never typed in).
 
 #include "core/types.hpp"
 #include "geometry/clump.hpp"
+#include "geometry/polyhedron.hpp"
 #include "geometry/superquadric.hpp"
 
 #include <map>
@@ -22,9 +22,9 @@ struct Sphere {
 };
 
 /// Every shape kiln knows; dispatch with std::visit.
-using Shape = std::variant<Sphere, Clump, Superquadric>;
+using Shape = std::variant<Sphere, Clump, Superquadric, ConvexPolyhedron>;
 
-/// Kind name of a shape ("sphere", "clump", "superquadric").
+/// Kind name of a shape ("sphere", "clump", "superquadric", "polyhedron").
 [[nodiscard]] const char* kind_name(const Shape& s);
 
 /// A solid a template approximates (for the captured volume fraction and density correction).
@@ -44,7 +44,8 @@ struct ShapeTemplate {
     double volume = 0.0; ///< solid volume (m^3)
     Vec3 inertia_unit_density = Vec3::Zero(); ///< principal moments per unit density (m^5)
     ReferenceSolid reference;                 ///< solid it approximates, kind "none" if any
-    bool density_correction = false; ///< scale the density so mass = rho * reference volume
+    bool density_correction = false;   ///< scale the density so mass = rho * reference volume
+    std::vector<std::string> warnings; ///< reader notes, e.g. non-convex input replaced by its hull
 
     /// Factor applied to the material density: reference.volume() / volume with the density
     /// correction (the seed's 1380 -> 1691 kg/m^3 for the 36-sphere cylinder), else 1.
@@ -60,7 +61,8 @@ struct ShapeTemplate {
 };
 
 /// Template of a shape whose mass properties follow from its geometry. Clumps must already be
-/// built by make_clump (principal frame); spheres and superquadrics are centred by definition.
+/// built by make_clump and polyhedra by make_polyhedron (principal frame); spheres and
+/// superquadrics are centred by definition.
 [[nodiscard]] ShapeTemplate make_template(std::string name, Shape shape);
 
 /// Named templates. Lookup of an unknown name is an input error listing the known names.

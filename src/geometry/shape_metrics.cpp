@@ -198,6 +198,9 @@ Estimate surface_area(const Shape& s) {
                                  [](const Superquadric& q) {
                                      return richardson(superquadric_area(q, 200),
                                                        superquadric_area(q, 400));
+                                 },
+                                 [](const ConvexPolyhedron& p) {
+                                     return Estimate{p.surface_area(), 0.0};
                                  }},
                       s);
 }
@@ -215,6 +218,9 @@ Estimate projected_area(const Shape& s, const Vec3& u_body) {
                                  [&](const Superquadric& q) {
                                      return richardson(superquadric_shadow(q, 200, u),
                                                        superquadric_shadow(q, 400, u));
+                                 },
+                                 [&](const ConvexPolyhedron& p) {
+                                     return Estimate{p.projected_area(u), 0.0};
                                  }},
                       s);
 }

@@ -15,12 +15,14 @@ struct Estimate {
 
 /// Surface area (m^2): analytic for spheres; superquadrics by a triangulation of the parametric
 /// surface (Richardson-extrapolated from two resolutions, error = their difference); clumps by
-/// the exposed area of each member (exact arcs along latitude bands, midpoint rule in latitude).
+/// the exposed area of each member (exact arcs along latitude bands, midpoint rule in latitude);
+/// polyhedra exactly (sum of the faces).
 [[nodiscard]] Estimate surface_area(const Shape& s);
 
 /// Area (m^2) of the shadow of the shape on a plane normal to the body-frame direction u.
 /// Spheres: analytic; superquadrics: 1/2 sum |n . u| dA over the triangulation (convex body);
-/// clumps: union of the member discs, exact chords along rows of a fine grid.
+/// clumps: union of the member discs, exact chords along rows of a fine grid; polyhedra exactly,
+/// 1/2 sum |n . u| A over the faces.
 [[nodiscard]] Estimate projected_area(const Shape& s, const Vec3& u_body);
 
 /// Shape factors of a template (see docs/theory/shapes.md for the definitions).

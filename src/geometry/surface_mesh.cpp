@@ -69,7 +69,11 @@ SurfaceMesh surface_mesh(const Shape& s, int n) {
                     append_superquadric(mesh, ball(m.radius), m.centre, n);
                 }
             },
-            [&](const Superquadric& q) { append_superquadric(mesh, q, Vec3::Zero(), n); }},
+            [&](const Superquadric& q) { append_superquadric(mesh, q, Vec3::Zero(), n); },
+            [&](const ConvexPolyhedron& p) {
+                mesh.vertices = p.vertices;
+                mesh.triangles = p.faces;
+            }},
         s);
     return mesh;
 }

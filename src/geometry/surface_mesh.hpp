@@ -21,7 +21,8 @@ struct SurfaceMesh {
 
 /// Surface of a shape: spheres and superquadrics from the parametric form with n latitude bands
 /// and 4 n longitudes (poles shared); clumps as one closed sphere mesh per member (overlapping
-/// parts stay inside the drawing, which is what a renderer needs).
+/// parts stay inside the drawing, which is what a renderer needs); polyhedra as their own triangles
+/// (n unused).
 [[nodiscard]] SurfaceMesh surface_mesh(const Shape& s, int n = 16);
 
 /// Copy of `mesh` placed at x (m, world) with orientation q (body -> world).

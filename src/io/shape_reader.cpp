@@ -3,6 +3,8 @@
 #include "io/shape_reader.hpp"
 
 #include "core/error.hpp"
+#include "geometry/hull.hpp"
+#include "io/mesh_reader.hpp"
 
 #include <cmath>
 #include <cstdlib>
@@ -233,6 +235,38 @@ geometry::ReferenceSolid read_reference(Reader& root, const std::string& file) {
     return ref;
 }
 
+/// Polyhedron template: the convex hull of the mesh file's points. Non-convex input is replaced by
+/// its hull with a warning stating the volume ratio (decomposition is not offered).
+geometry::ShapeTemplate read_polyhedron(Reader& root, const std::string& file,
+                                        const std::string& stem) {
+    const std::string mesh_name = root.string("mesh", "", {});
+    if (mesh_name.empty()) {
+        root.fail("mesh", "missing required value: a .obj or .stl file, relative to this file");
+    }
+    const double scale = root.real_or("scale", 1.0, 1e-9, 1e3, "m per file unit");
+    const std::filesystem::path mesh_file = std::filesystem::path(file).parent_path() / mesh_name;
+    if (!std::filesystem::exists(mesh_file)) {
+        root.fail("mesh", fmt::format("mesh file {} not found", mesh_file.string()));
+    }
+    const MeshInput in = read_mesh_file(mesh_file, scale);
+    const geometry::Hull hull = geometry::convex_hull(in.points, mesh_file.string());
+    geometry::ShapeTemplate t = geometry::make_template(
+        stem, geometry::make_polyhedron(hull.vertices, hull.faces, mesh_file.string()));
+    if (!in.triangles.empty()) {
+        // A closed input surface encloses at most its hull's volume; less means it is not convex.
+        const double v_in =
+            std::abs(geometry::polyhedron_mass_properties(in.points, in.triangles).volume);
+        constexpr double kConvexTolerance = 1e-9; // relative round-off of the two volume sums
+        if (v_in < (1.0 - kConvexTolerance) * t.volume) {
+            t.warnings.push_back(fmt::format(
+                "{}: the mesh is not convex; using its convex hull (mesh volume / hull volume = "
+                "{:.6f})",
+                mesh_file.string(), v_in / t.volume));
+        }
+    }
+    return t;
+}
+
 } // namespace
 
 geometry::ShapeTemplate read_shape_text(const std::string& text, const std::string& name) {
@@ -244,7 +278,8 @@ geometry::ShapeTemplate read_shape_text(const std::string& text, const std::stri
                          std::string("TOML syntax error: ") + std::string(e.description()));
     }
     Reader root(name, doc, "");
-    const std::string kind = root.string("kind", "", {"sphere", "clump", "superquadric"});
+    const std::string kind =
+        root.string("kind", "", {"sphere", "clump", "superquadric", "polyhedron"});
     (void)root.string("description", "-", {});
     const std::string stem = std::filesystem::path(name).stem().string();
     geometry::ShapeTemplate t;
@@ -260,6 +295,8 @@ geometry::ShapeTemplate read_shape_text(const std::string& text, const std::stri
         q.e2 = e[1];
         q.validate(name);
         t = geometry::make_template(stem, q);
+    } else if (kind == "polyhedron") {
+        t = read_polyhedron(root, name, stem);
     } else {
         const std::vector<ClumpSphere> spheres = read_clump_spheres(root, name);
         const long n = root.integer("resolution", 1200, 50, 20000);

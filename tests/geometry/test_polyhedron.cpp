@@ -1,0 +1,212 @@
+// Convex polyhedra: exact mass properties of boxes and the tetrahedron, invariance under rotation,
+// translation and extra interior points, support map against brute force, refused degenerate input.
+
+#include "core/error.hpp"
+#include "geometry/hull.hpp"
+#include "geometry/polyhedron.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <gtest/gtest.h>
+#include <random>
+
+namespace g = kiln::geometry;
+using kiln::Mat3;
+using kiln::Vec3;
+
+namespace {
+
+constexpr double kExact = 1e-13; // relative: sums of a few dozen products of O(1) numbers
+constexpr double kCloud = 1e-11; // relative: hull of hundreds of rotated points, then eigen-solve
+
+g::ConvexPolyhedron from_points(const std::vector<Vec3>& pts) {
+    const g::Hull h = g::convex_hull(pts, "test");
+    return g::make_polyhedron(h.vertices, h.faces, "test");
+}
+
+std::vector<Vec3> box_corners(const Vec3& e) {
+    std::vector<Vec3> p;
+    for (int i = 0; i < 8; ++i) {
+        p.emplace_back((i & 1 ? 0.5 : -0.5) * e.x(), (i & 2 ? 0.5 : -0.5) * e.y(),
+                       (i & 4 ? 0.5 : -0.5) * e.z());
+    }
+    return p;
+}
+
+/// Closed-form principal moments per unit density of a box with edges e, ascending.
+Vec3 box_moments(const Vec3& e) {
+    const double v = e.prod();
+    Vec3 m(v / 12.0 * (e.y() * e.y() + e.z() * e.z()), v / 12.0 * (e.x() * e.x() + e.z() * e.z()),
+           v / 12.0 * (e.x() * e.x() + e.y() * e.y()));
+    std::sort(m.begin(), m.end());
+    return m;
+}
+
+/// Integral of x^a y^b z^c over the unit simplex: a! b! c! / (a + b + c + 3)! (Dirichlet).
+double simplex_moment(int a, int b, int c) {
+    const auto fact = [](int n) {
+        double f = 1.0;
+        for (int k = 2; k <= n; ++k) {
+            f *= k;
+        }
+        return f;
+    };
+    return fact(a) * fact(b) * fact(c) / fact(a + b + c + 3);
+}
+
+Mat3 random_rotation(std::mt19937& rng) {
+    std::normal_distribution<double> n(0.0, 1.0);
+    return kiln::Quat(n(rng), n(rng), n(rng), n(rng)).normalized().toRotationMatrix();
+}
+
+} // namespace
+
+TEST(Polyhedron, UnitCubeIsExact) {
+    const g::ConvexPolyhedron p = from_points(box_corners(Vec3::Ones()));
+    EXPECT_NEAR(p.volume, 1.0, kExact);
+    for (int k = 0; k < 3; ++k) {
+        EXPECT_NEAR(p.inertia_unit_density[k], 1.0 / 6.0, kExact);
+    }
+    EXPECT_EQ(p.vertices.size(), 8U);
+    EXPECT_EQ(p.faces.size(), 12U); // the seed's "12 triangles, 8 vertices and 18 edges"
+    EXPECT_EQ(p.edges.size(), 18U);
+    EXPECT_NEAR(p.surface_area(), 6.0, kExact);
+    EXPECT_NEAR(p.bounding_radius(), std::sqrt(3.0) / 2.0, kExact);
+}
+
+TEST(Polyhedron, CuboidIsExactAndPrincipal) {
+    const Vec3 e(6.0, 5.0, 2.0);
+    const g::ConvexPolyhedron p = from_points(box_corners(e));
+    EXPECT_NEAR(p.volume, e.prod(), kExact * e.prod());
+    const Vec3 m = box_moments(e);
+    for (int k = 0; k < 3; ++k) {
+        EXPECT_NEAR(p.inertia_unit_density[k], m[k], kExact * m[k]);
+    }
+    // The body frame is principal: the inertia tensor of the moved vertices is diagonal.
+    const g::MassProperties b = g::polyhedron_mass_properties(p.vertices, p.faces);
+    EXPECT_LT(b.centroid.norm(), kExact * e.norm());
+    EXPECT_LT((b.inertia_centroid - Mat3(p.inertia_unit_density.asDiagonal())).norm(),
+              kExact * m.norm());
+    EXPECT_NEAR(p.surface_area(), 2.0 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x()),
+                kExact * 100.0);
+    // Shadows along the principal axes: the largest moment is about the axis normal to 6 x 5.
+    EXPECT_NEAR(p.projected_area(Vec3::UnitZ()), e.x() * e.y(), kExact * 30.0);
+    EXPECT_NEAR(p.projected_area(Vec3::UnitX()), e.y() * e.z(), kExact * 30.0);
+}
+
+TEST(Polyhedron, UnitTetrahedronMatchesDirichletMoments) {
+    const std::vector<Vec3> v{Vec3::Zero(), Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ()};
+    const std::vector<std::array<int, 3>> f{{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+    const g::MassProperties m = g::polyhedron_mass_properties(v, f);
+    const double vol = simplex_moment(0, 0, 0);
+    const double c = simplex_moment(1, 0, 0) / vol;
+    EXPECT_NEAR(m.volume, vol, kExact);
+    EXPECT_LT((m.centroid - Vec3::Constant(c)).norm(), kExact);
+    const double cov_xx = simplex_moment(2, 0, 0) - vol * c * c;
+    const double cov_xy = simplex_moment(1, 1, 0) - vol * c * c;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            const double expected = i == j ? 2.0 * cov_xx : -cov_xy;
+            EXPECT_NEAR(m.inertia_centroid(i, j), expected, kExact) << i << j;
+        }
+    }
+    // The same tetrahedron through the hull: principal moments are the eigenvalues of that tensor.
+    const g::ConvexPolyhedron p = from_points(v);
+    EXPECT_NEAR(p.volume, vol, kExact);
+    const g::PrincipalFrame pf = g::principal_frame(m.inertia_centroid);
+    EXPECT_LT((p.inertia_unit_density - pf.moments).norm(), kExact);
+}
+
+TEST(Polyhedron, RotatedTranslatedCloudsGiveTheSameProperties) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    // A hull of random points on an ellipsoid, plus points strictly inside it.
+    std::vector<Vec3> base;
+    for (int i = 0; i < 300; ++i) {
+        Vec3 d(u(rng), u(rng), u(rng));
+        d.normalize();
+        base.emplace_back(3.0 * d.x(), 2.0 * d.y(), 1.0 * d.z());
+    }
+    const g::ConvexPolyhedron ref = from_points(base);
+    for (int i = 0; i < 200; ++i) {
+        base.push_back(0.5 * Vec3(u(rng), u(rng), u(rng)));
+    }
+    for (int trial = 0; trial < 5; ++trial) {
+        const Mat3 r = random_rotation(rng);
+        const Vec3 t = 100.0 * Vec3(u(rng), u(rng), u(rng));
+        std::vector<Vec3> moved;
+        for (const Vec3& p : base) {
+            moved.push_back(r * p + t);
+        }
+        std::shuffle(moved.begin(), moved.end(), rng);
+        const g::ConvexPolyhedron p = from_points(moved);
+        EXPECT_EQ(p.vertices.size(), ref.vertices.size());
+        EXPECT_NEAR(p.volume, ref.volume, kCloud * ref.volume);
+        for (int k = 0; k < 3; ++k) {
+            EXPECT_NEAR(p.inertia_unit_density[k], ref.inertia_unit_density[k],
+                        kCloud * ref.inertia_unit_density[k]);
+        }
+        EXPECT_LT((p.template_centroid - (r * ref.template_centroid + t)).norm(), kCloud * 100.0);
+        EXPECT_NEAR(p.surface_area(), ref.surface_area(), kCloud * ref.surface_area());
+    }
+}
+
+TEST(Polyhedron, SupportMatchesBruteForceOverTheInputPoints) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::vector<Vec3> pts;
+    for (int i = 0; i < 400; ++i) {
+        pts.emplace_back(2.0 * u(rng), u(rng), 0.5 * u(rng));
+    }
+    const g::ConvexPolyhedron p = from_points(pts);
+    for (int trial = 0; trial < 1000; ++trial) {
+        const Vec3 d = Vec3(u(rng), u(rng), u(rng)).normalized();
+        double best = -1e300;
+        for (const Vec3& q : pts) {
+            best = std::max(best, d.dot(p.template_axes.transpose() * (q - p.template_centroid)));
+        }
+        EXPECT_NEAR(p.support(d).dot(d), best, kExact * 10.0);
+    }
+}
+
+TEST(Polyhedron, DegenerateInputIsRefused) {
+    const auto message = [](const std::vector<Vec3>& pts) {
+        try {
+            (void)g::convex_hull(pts, "bad.obj");
+        } catch (const kiln::InputError& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    EXPECT_NE(message({Vec3::Zero(), Vec3::UnitX(), Vec3::UnitY()}).find("at least 4 points"),
+              std::string::npos);
+    EXPECT_NE(message(std::vector<Vec3>(5, Vec3::Ones())).find("coincide"), std::string::npos);
+    std::vector<Vec3> line;
+    std::vector<Vec3> flat;
+    for (int i = 0; i < 10; ++i) {
+        line.push_back(Vec3(1.0, 2.0, 3.0) * i);
+        flat.emplace_back(std::cos(i), std::sin(i), 0.3 * std::cos(i));
+    }
+    EXPECT_NE(message(line).find("collinear"), std::string::npos);
+    const std::string m = message(flat);
+    EXPECT_NE(m.find("coplanar"), std::string::npos) << m;
+    EXPECT_EQ(m.rfind("bad.obj", 0), 0U) << m;
+    // An open surface (a cube without its top two triangles) is refused by make_polyhedron.
+    const g::Hull h = g::convex_hull(box_corners(Vec3::Ones()), "cube");
+    std::vector<std::array<int, 3>> open;
+    for (const auto& f : h.faces) {
+        bool top = true;
+        for (int k : f) {
+            top = top && h.vertices[static_cast<std::size_t>(k)].z() > 0.0;
+        }
+        if (!top) {
+            open.push_back(f);
+        }
+    }
+    ASSERT_EQ(open.size(), 10U);
+    EXPECT_THROW((void)g::make_polyhedron(h.vertices, open, "open"), kiln::InputError);
+    // A vertex on no face is refused too (it would enter the support map but not the volume).
+    std::vector<Vec3> stray = h.vertices;
+    stray.push_back(Vec3(5.0, 0.0, 0.0));
+    EXPECT_THROW((void)g::make_polyhedron(stray, h.faces, "stray"), kiln::InputError);
+}
