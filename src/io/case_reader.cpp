@@ -1,4 +1,5 @@
 #include "io/case_reader.hpp"
+#include "io/toml_text.hpp"
 
 #include "core/error.hpp"
 
@@ -483,13 +484,7 @@ void read_inserts(Section& root, CaseSpec& c, const std::map<std::string, int>& 
 } // namespace
 
 CaseSpec read_case_text(const std::string& text, const std::string& name) {
-    toml::table doc;
-    try {
-        doc = toml::parse(text, name);
-    } catch (const toml::parse_error& e) {
-        throw InputError(name, static_cast<long>(e.source().begin.line), "",
-                         std::string("TOML syntax error: ") + std::string(e.description()));
-    }
+    const toml::table doc = parse_toml_text(text, name);
     CaseSpec c;
     c.source_file = name;
     toml::table resolved;

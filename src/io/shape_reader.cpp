@@ -1,6 +1,7 @@
 // Strict reader of shape template files; see shape_reader.hpp and shapes/README.md.
 
 #include "io/shape_reader.hpp"
+#include "io/toml_text.hpp"
 
 #include "core/error.hpp"
 #include "geometry/hull.hpp"
@@ -270,13 +271,7 @@ geometry::ShapeTemplate read_polyhedron(Reader& root, const std::string& file,
 } // namespace
 
 geometry::ShapeTemplate read_shape_text(const std::string& text, const std::string& name) {
-    toml::table doc;
-    try {
-        doc = toml::parse(text, name);
-    } catch (const toml::parse_error& e) {
-        throw InputError(name, static_cast<long>(e.source().begin.line), "",
-                         std::string("TOML syntax error: ") + std::string(e.description()));
-    }
+    const toml::table doc = parse_toml_text(text, name);
     Reader root(name, doc, "");
     const std::string kind =
         root.string("kind", "", {"sphere", "clump", "superquadric", "polyhedron"});
