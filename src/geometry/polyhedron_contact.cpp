@@ -126,6 +126,9 @@ struct Relative {
     std::vector<Vec3> vb;   // B's vertices in A's frame (m)
     std::vector<Vec3> nb;   // B's face normals in A's frame
     std::vector<double> ob; // B's face offsets in A's frame (m)
+    // Per feature edge of B, in A's frame: the negated normals c, d of its two faces and d x c,
+    // the Gauss-map arc of the edge of -B.
+    std::vector<std::array<Vec3, 3>> arcs;
 };
 
 void make_relative(const PosedPolyhedron& a, const PosedPolyhedron& b, Relative& r) {
@@ -142,6 +145,12 @@ void make_relative(const PosedPolyhedron& a, const PosedPolyhedron& b, Relative&
     for (std::size_t k = 0; k < fb.face_normals.size(); ++k) {
         r.nb[k] = r.rot * fb.face_normals[k];
         r.ob[k] = fb.face_offsets[k] + r.nb[k].dot(r.shift);
+    }
+    r.arcs.resize(fb.edges.size());
+    for (std::size_t k = 0; k < fb.edges.size(); ++k) {
+        const Vec3 c = -r.nb[static_cast<std::size_t>(fb.edges[k][2])];
+        const Vec3 d = -r.nb[static_cast<std::size_t>(fb.edges[k][3])];
+        r.arcs[k] = {c, d, d.cross(c)};
     }
 }
 
@@ -306,12 +315,12 @@ PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhe
             const Vec3 bxa = na1.cross(na0);
             const Vec3& pa = fa.vertices[static_cast<std::size_t>(ea[0])];
             const Vec3 da = fa.vertices[static_cast<std::size_t>(ea[1])] - pa;
-            for (const auto& eb : fb.edges) {
-                const Vec3 nb0 = -r.nb[static_cast<std::size_t>(eb[2])];
-                const Vec3 nb1 = -r.nb[static_cast<std::size_t>(eb[3])];
-                if (!is_minkowski_face(na0, na1, bxa, nb0, nb1, nb1.cross(nb0))) {
+            for (std::size_t k = 0; k < fb.edges.size(); ++k) {
+                const auto& arc = r.arcs[k];
+                if (!is_minkowski_face(na0, na1, bxa, arc[0], arc[1], arc[2])) {
                     continue;
                 }
+                const auto& eb = fb.edges[k];
                 ++c.iterations;
                 const Vec3& pb = r.vb[static_cast<std::size_t>(eb[0])];
                 const Vec3 db = r.vb[static_cast<std::size_t>(eb[1])] - pb;
