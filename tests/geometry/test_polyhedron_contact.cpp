@@ -277,7 +277,12 @@ TEST(PolyhedronContact, PlaneIsOptimalAndAgreesWithEpa) {
                 const RandomPair p = random_pair(shapes[i], shapes[j], rng);
                 const double scale = shapes[i].radius + shapes[j].radius;
                 const g::PolyhedronContact c = g::polyhedron_contact(p.a, p.b);
-                ASSERT_TRUE(c.touching);
+                if (!c.touching) {
+                    // Overlapping supports along u need not overlap the bodies at a sharp vertex:
+                    // then libccd must find them apart too.
+                    EXPECT_FALSE(g::ccd_contact(p.a, p.b, false).touching);
+                    continue;
+                }
                 ++pairs;
                 // The reported overlap is the overlap along the reported normal ...
                 EXPECT_NEAR(overlap_along(p.a, p.b, c.normal), c.depth, kExact * scale);
@@ -377,7 +382,7 @@ g::ConvexContact fcl_contact(const std::shared_ptr<fcl::Convexd>& sa, const g::P
         }
         c.touching = true;
         c.depth = -res.min_distance * unit;
-        c.normal = (res.nearest_points[0] - res.nearest_points[1]).normalized();
+        c.normal = (res.nearest_points[1] - res.nearest_points[0]).normalized();
         return c;
     }
     fcl::CollisionRequestd req(1, true);
@@ -414,6 +419,9 @@ TEST(PolyhedronContact, AgreesWithFcl) {
             for (int n = 0; n < 10; ++n) {
                 const RandomPair p = random_pair(fa, fb, rng);
                 const g::PolyhedronContact c = g::polyhedron_contact(p.a, p.b, false);
+                if (!c.touching) {
+                    continue; // apart (sharp vertex); compared in PlaneIsOptimalAndAgreesWithEpa
+                }
                 const g::ConvexContact f =
                     fcl_contact(sa, p.a, sb, p.b, unit, FclPath::kSignedDistance);
                 ++compared;
