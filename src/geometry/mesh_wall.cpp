@@ -319,6 +319,11 @@ void MeshWall::sphere_contacts(const Vec3& c, double r, std::vector<MeshContact>
             verts.push_back(m);
         }
     }
+    thin(out, edges, verts, r);
+}
+
+void MeshWall::thin(std::vector<MeshContact>& out, std::vector<MeshContact>& edges,
+                    std::vector<MeshContact>& verts, double r) const {
     // Feature hierarchy: face > edge > vertex (Santasusana et al. 2016). An edge or vertex contact
     // is dropped when it was already found from another triangle (same id), when a triangle in
     // face contact contains it, or when it lies on the plane of an accepted contact that
@@ -382,40 +387,129 @@ void MeshWall::sphere_contacts(const Vec3& c, double r, std::vector<MeshContact>
     }
 }
 
+namespace {
+
+/// A posed polyhedron in the world frame: vertices, face half-spaces n . x <= o, feature edges.
+struct WorldBody {
+    std::vector<Vec3> pts;
+    std::vector<Vec3> fn;
+    std::vector<double> fo;
+    const std::vector<std::array<int, 4>>* edges = nullptr;
+};
+
+void to_world(const PosedPolyhedron& p, WorldBody& w) {
+    const PolyhedronFeatures& f = *p.shape;
+    const Mat3 rot = p.q.toRotationMatrix();
+    w.pts.resize(f.vertices.size());
+    for (std::size_t i = 0; i < w.pts.size(); ++i) {
+        w.pts[i] = p.x + rot * f.vertices[i];
+    }
+    w.fn.resize(f.face_normals.size());
+    w.fo.resize(f.face_normals.size());
+    for (std::size_t k = 0; k < w.fn.size(); ++k) {
+        w.fn[k] = rot * f.face_normals[k];
+        w.fo[k] = f.face_offsets[k] + w.fn[k].dot(p.x);
+    }
+    w.edges = &f.edges;
+}
+
+/// 2D box (basis u, v) of the part of the body below the plane n . x = o: the hull of its vertices
+/// below the plane and of its section by the plane.
+std::array<detail::Vec2, 2> box_below(const WorldBody& b, const Vec3& n, double o, const Vec3& u,
+                                      const Vec3& v) {
+    detail::Vec2 lo = detail::Vec2::Constant(std::numeric_limits<double>::infinity());
+    detail::Vec2 hi = -lo;
+    for (const detail::Vec2& q : detail::section(b.pts, *b.edges, n, o, u, v)) {
+        lo = lo.cwiseMin(q);
+        hi = hi.cwiseMax(q);
+    }
+    for (const Vec3& x : b.pts) {
+        if (n.dot(x) < o) {
+            const detail::Vec2 q(u.dot(x), v.dot(x));
+            lo = lo.cwiseMin(q);
+            hi = hi.cwiseMax(q);
+        }
+    }
+    return {lo, hi};
+}
+
+/// Deepest point below the plane n . x = o of the body inside the prism over triangle t (exact:
+/// the body's edges clipped to the prism's sides and the prism's corner lines clipped to the
+/// body). Raises depth (m) and sets deepest when a deeper point is found.
+void deepest_in_prism(const WorldBody& b, const std::array<Vec3, 3>& t, const Vec3& n, double o,
+                      double& depth, Vec3& deepest) {
+    thread_local std::vector<Vec3> side_n(3);
+    thread_local std::vector<double> side_o(3);
+    thread_local std::vector<Vec3> clipped;
+    for (std::size_t e = 0; e < 3; ++e) {
+        side_n[e] = (t[(e + 1) % 3] - t[e]).cross(n).normalized();
+        side_o[e] = side_n[e].dot(t[e]);
+    }
+    clipped.clear();
+    for (const auto& e : *b.edges) {
+        detail::clip_edge(b.pts[static_cast<std::size_t>(e[0])],
+                          b.pts[static_cast<std::size_t>(e[1])], side_n, side_o, clipped);
+    }
+    for (const Vec3& t0 : t) {
+        // The corner line t0 + lambda n clipped to the body: its lowest end.
+        double lo = -std::numeric_limits<double>::infinity();
+        double hi = std::numeric_limits<double>::infinity();
+        for (std::size_t q = 0; q < b.fn.size() && lo <= hi; ++q) {
+            const double den = b.fn[q].dot(n);
+            const double num = b.fo[q] - b.fn[q].dot(t0);
+            if (den > 0.0) {
+                hi = std::min(hi, num / den);
+            } else if (den < 0.0) {
+                lo = std::max(lo, num / den);
+            } else if (num < 0.0) {
+                hi = -std::numeric_limits<double>::infinity();
+            }
+        }
+        if (lo <= hi) {
+            clipped.push_back(t0 + lo * n);
+        }
+    }
+    for (const Vec3& x : clipped) {
+        const double d = o - n.dot(x);
+        if (d > depth) {
+            depth = d;
+            deepest = x;
+        }
+    }
+}
+
+/// True when the 2D box of triangle t2 misses the box [lo, hi].
+bool misses(const std::array<detail::Vec2, 3>& t2, const std::array<detail::Vec2, 2>& box) {
+    const detail::Vec2 tlo = t2[0].cwiseMin(t2[1]).cwiseMin(t2[2]);
+    const detail::Vec2 thi = t2[0].cwiseMax(t2[1]).cwiseMax(t2[2]);
+    return (thi.array() < box[0].array()).any() || (tlo.array() > box[1].array()).any();
+}
+
+} // namespace
+
+std::array<Vec3, 3> MeshWall::corners(int t) const {
+    const auto& tri = triangles_[static_cast<std::size_t>(t)];
+    return {vertices_[static_cast<std::size_t>(tri[0])],
+            vertices_[static_cast<std::size_t>(tri[1])],
+            vertices_[static_cast<std::size_t>(tri[2])]};
+}
+
 void MeshWall::polyhedron_contacts(const PosedPolyhedron& p, std::vector<MeshContact>& out) const {
     out.clear();
-    const PolyhedronFeatures& f = *p.shape;
     thread_local std::vector<int> tris;
-    const Vec3 reach = Vec3::Constant(f.radius);
+    const Vec3 reach = Vec3::Constant(p.shape->radius);
     candidates(p.x - reach, p.x + reach, tris);
     if (tris.empty()) {
         return;
     }
-    // The body in the world frame: vertices and face half-spaces n . x <= o.
-    thread_local std::vector<Vec3> pts;
-    thread_local std::vector<Vec3> fn;
-    thread_local std::vector<double> fo;
-    const Mat3 rot = p.q.toRotationMatrix();
-    pts.resize(f.vertices.size());
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-        pts[i] = p.x + rot * f.vertices[i];
-    }
-    fn.resize(f.face_normals.size());
-    fo.resize(f.face_normals.size());
-    for (std::size_t k = 0; k < fn.size(); ++k) {
-        fn[k] = rot * f.face_normals[k];
-        fo[k] = f.face_offsets[k] + fn[k].dot(p.x);
-    }
-    // Deepest point of the body inside each candidate triangle's prism, collected per facet.
+    thread_local WorldBody body;
+    to_world(p, body);
     thread_local std::vector<std::pair<int, int>> by_facet; // (facet, triangle)
     by_facet.clear();
     for (const int t : tris) {
         by_facet.emplace_back(facet_of_[static_cast<std::size_t>(t)], t);
     }
     std::sort(by_facet.begin(), by_facet.end());
-    std::vector<Vec3> side_n(3);
-    std::vector<double> side_o(3);
-    std::vector<Vec3> clipped;
     for (std::size_t i = 0; i < by_facet.size();) {
         const int facet = by_facet[i].first;
         std::size_t j = i;
@@ -424,48 +518,21 @@ void MeshWall::polyhedron_contacts(const PosedPolyhedron& p, std::vector<MeshCon
         }
         const Vec3& n = facet_normals_[static_cast<std::size_t>(facet)];
         const double o = facet_offsets_[static_cast<std::size_t>(facet)];
+        const Vec3 u = n.unitOrthogonal();
+        const Vec3 v = n.cross(u);
+        const auto project = [&](const std::array<Vec3, 3>& t) {
+            return std::array<detail::Vec2, 3>{detail::Vec2(u.dot(t[0]), v.dot(t[0])),
+                                               detail::Vec2(u.dot(t[1]), v.dot(t[1])),
+                                               detail::Vec2(u.dot(t[2]), v.dot(t[2]))};
+        };
         double depth = 0.0;
         Vec3 deepest = Vec3::Zero();
         if (n.dot(p.x) - o > 0.0 && n.dot(p.support(-n)) < o) {
+            const auto below = box_below(body, n, o, u, v);
             for (std::size_t k = i; k < j; ++k) {
-                const auto& tri = triangles_[static_cast<std::size_t>(by_facet[k].second)];
-                for (std::size_t e = 0; e < 3; ++e) {
-                    const Vec3& t0 = vertices_[static_cast<std::size_t>(tri[e])];
-                    const Vec3& t1 = vertices_[static_cast<std::size_t>(tri[(e + 1) % 3])];
-                    side_n[e] = (t1 - t0).cross(n).normalized();
-                    side_o[e] = side_n[e].dot(t0);
-                }
-                clipped.clear();
-                for (const auto& e : f.edges) {
-                    detail::clip_edge(pts[static_cast<std::size_t>(e[0])],
-                                      pts[static_cast<std::size_t>(e[1])], side_n, side_o, clipped);
-                }
-                // The prism's corner lines t + lambda n, clipped to the body: lowest end.
-                for (const int v : tri) {
-                    const Vec3& t0 = vertices_[static_cast<std::size_t>(v)];
-                    double lo = -std::numeric_limits<double>::infinity();
-                    double hi = std::numeric_limits<double>::infinity();
-                    for (std::size_t q = 0; q < fn.size() && lo <= hi; ++q) {
-                        const double den = fn[q].dot(n);
-                        const double num = fo[q] - fn[q].dot(t0);
-                        if (den > 0.0) {
-                            hi = std::min(hi, num / den);
-                        } else if (den < 0.0) {
-                            lo = std::max(lo, num / den);
-                        } else if (num < 0.0) {
-                            hi = -std::numeric_limits<double>::infinity();
-                        }
-                    }
-                    if (lo <= hi) {
-                        clipped.push_back(t0 + lo * n);
-                    }
-                }
-                for (const Vec3& x : clipped) {
-                    const double d = o - n.dot(x);
-                    if (d > depth) {
-                        depth = d;
-                        deepest = x;
-                    }
+                const auto t = corners(by_facet[k].second);
+                if (!misses(project(t), below)) {
+                    deepest_in_prism(body, t, n, o, depth, deepest);
                 }
             }
         }
@@ -477,22 +544,25 @@ void MeshWall::polyhedron_contacts(const PosedPolyhedron& p, std::vector<MeshCon
             m.depth = depth;
             // Patch: the body's section half way through the overlap, clipped by the triangles.
             const double level = o - 0.5 * depth;
-            const Vec3 u = n.unitOrthogonal();
-            const Vec3 v = n.cross(u);
-            const double scale2 = f.radius * f.radius;
-            const std::vector<detail::Vec2> sec =
-                detail::hull_2d(detail::section(pts, f.edges, n, level, u, v), 1e-24 * scale2);
+            const double scale2 = p.shape->radius * p.shape->radius;
+            const std::vector<detail::Vec2> sec = detail::hull_2d(
+                detail::section(body.pts, *body.edges, n, level, u, v), 1e-24 * scale2);
             double area2 = 0.0;
             detail::Vec2 moment = detail::Vec2::Zero();
             if (sec.size() >= 3) {
+                std::array<detail::Vec2, 2> box{sec[0], sec[0]};
+                for (const detail::Vec2& q : sec) {
+                    box[0] = box[0].cwiseMin(q);
+                    box[1] = box[1].cwiseMax(q);
+                }
                 for (std::size_t k = i; k < j; ++k) {
-                    const auto& tri = triangles_[static_cast<std::size_t>(by_facet[k].second)];
-                    std::vector<detail::Vec2> t2;
-                    for (const int w : tri) {
-                        const Vec3& x = vertices_[static_cast<std::size_t>(w)];
-                        t2.emplace_back(u.dot(x), v.dot(x));
+                    const auto t2 = project(corners(by_facet[k].second));
+                    if (!misses(t2, box)) {
+                        detail::accumulate_polygon(
+                            detail::clip_convex(sec,
+                                                std::vector<detail::Vec2>(t2.begin(), t2.end())),
+                            area2, moment);
                     }
-                    detail::accumulate_polygon(detail::clip_convex(sec, t2), area2, moment);
                 }
             }
             if (area2 > 2e-24 * scale2) {

@@ -75,6 +75,12 @@ class MeshWall {
     /// Triangles whose bounding boxes overlap the box [lo, hi] (m, world), sorted, unique.
     void candidates(const Vec3& lo, const Vec3& hi, std::vector<int>& out) const;
     [[nodiscard]] std::array<int, 3> cell_of(const Vec3& x) const;
+    /// Feature hierarchy of the sphere contacts: `out` holds the face contacts and receives the
+    /// edge and vertex contacts that survive (sphere radius r (m)).
+    void thin(std::vector<MeshContact>& out, std::vector<MeshContact>& edges,
+              std::vector<MeshContact>& verts, double r) const;
+    /// Corner positions of triangle t (m, world).
+    [[nodiscard]] std::array<Vec3, 3> corners(int t) const;
 
     std::vector<Vec3> vertices_;
     std::vector<std::array<int, 3>> triangles_;
