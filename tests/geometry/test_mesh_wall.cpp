@@ -91,6 +91,50 @@ TEST(MeshWall, SphereSlidesAcrossSharedEdgesWithoutBump) {
     EXPECT_EQ(most, 1);
 }
 
+TEST(MeshWall, SphereRollsOverAConvexRidgeWithoutJump) {
+    // Two planes sloping down by 20 degrees from a ridge along y (x = 0, z = 0), each of two
+    // triangles. The sphere centre keeps the distance r - delta from the surface: over face 1,
+    // around the ridge on a circle, over face 2. One contact of depth delta throughout, whose
+    // normal turns from n1 to n2 only while the centre is in the ridge's region, by at most the
+    // step angle.
+    const double s = 2e-3;
+    const double a = 20.0 * kPi / 180.0;
+    const double drop = s * std::tan(a);
+    const std::vector<Vec3> v{{-s, -s, -drop}, {0, -s, 0},     {0, s, 0},
+                              {-s, s, -drop},  {s, -s, -drop}, {s, s, -drop}};
+    const g::MeshWall w(v, {{0, 1, 2}, {0, 2, 3}, {1, 4, 5}, {1, 5, 2}}, "ridge");
+    EXPECT_EQ(w.facet_count(), 2);
+    const Vec3 n1(-std::sin(a), 0, std::cos(a));
+    const Vec3 n2(std::sin(a), 0, std::cos(a));
+    const double r = 0.5e-3;
+    const double delta = 1e-5;
+    std::vector<g::MeshContact> out;
+    std::vector<Vec3> centres;
+    for (int k = 0; k <= 500; ++k) { // along face 1 towards the ridge
+        centres.push_back(Vec3(-std::cos(a), 0, -std::sin(a)) * (0.5 * s * (1.0 - k / 500.0)) +
+                          (r - delta) * n1);
+    }
+    for (int k = 1; k <= 1000; ++k) { // around the ridge
+        const double phi = -a + 2.0 * a * k / 1000.0;
+        centres.push_back((r - delta) * Vec3(std::sin(phi), 0, std::cos(phi)));
+    }
+    for (int k = 1; k <= 500; ++k) { // down face 2
+        centres.push_back(Vec3(std::cos(a), 0, -std::sin(a)) * (0.5 * s * k / 500.0) +
+                          (r - delta) * n2);
+    }
+    Vec3 last = n1;
+    double worst_turn = 0.0;
+    for (const Vec3& c : centres) {
+        w.sphere_contacts(c + Vec3(0, 0.3e-3, 0), r, out);
+        ASSERT_EQ(out.size(), 1U) << c.transpose();
+        EXPECT_NEAR(out[0].depth, delta, kExact * r);
+        worst_turn = std::max(worst_turn, (out[0].normal - last).norm());
+        last = out[0].normal;
+    }
+    EXPECT_NEAR((last - n2).norm(), 0.0, kExact);
+    EXPECT_LT(worst_turn, 1.01 * 2.0 * a / 1000.0); // one step of the arc
+}
+
 TEST(MeshWall, SphereInAConcaveCornerHasTwoContacts) {
     // Floor z = 0 and wall x = 0 (normal +x), both facing the sphere: two face contacts.
     const double s = 1e-3;

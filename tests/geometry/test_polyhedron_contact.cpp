@@ -318,6 +318,11 @@ TEST(PolyhedronContact, PlaneIsOptimalAndAgreesWithEpa) {
                     EXPECT_LT(outside(p.a, x), 1e-10 * scale);
                     EXPECT_LT(outside(p.b, x), 1e-10 * scale);
                 }
+                // The patch along EPA's (or any given) normal: the same as the plane's own.
+                const g::PolyhedronContact along = g::contact_patch_along(p.a, p.b, c.normal);
+                EXPECT_NEAR(along.depth, c.depth, kExact * scale);
+                EXPECT_NEAR(along.patch_area, c.patch_area, 1e-9 * c.patch_area + 1e-20);
+                EXPECT_NEAR((along.point - c.point).norm(), 0.0, kExact * scale);
                 // Pair order: same overlap, opposite normal.
                 const g::PolyhedronContact r = g::polyhedron_contact(p.b, p.a);
                 EXPECT_NEAR(r.depth, c.depth, kExact * scale);
