@@ -13,6 +13,7 @@
 #include <cmath>
 #include <gtest/gtest.h>
 #include <numbers>
+#include <random>
 
 namespace g = kiln::geometry;
 using kiln::Quat;
@@ -197,6 +198,43 @@ TEST(MeshWall, PolyhedronSlidesAcrossSharedEdgesWithoutBump) {
         }
         EXPECT_LT(worst, 1e-8) << th;
     }
+}
+
+TEST(MeshWall, CubeOnMeshBoxMatchesTheCommonPlaneWithTheBoxAsABody) {
+    // Random cube poses touching the top face of shapes/wall_box_20mm.stl away from its rim: the
+    // facet contact's overlap must equal the common-plane overlap with the same box taken as a
+    // convex body (the plane is then the box's top face), and the patch areas must agree.
+    const auto mesh = kiln::io::read_mesh_file(
+        std::filesystem::path(KILN_SOURCE_DIR) / "shapes" / "wall_box_20mm.stl", 1e-3);
+    const g::MeshWall box(mesh.points, mesh.triangles, "wall_box_20mm.stl");
+    const g::ConvexPolyhedron solid = g::make_polyhedron(mesh.points, mesh.triangles, "box");
+    const g::PolyhedronFeatures box_features = g::polyhedron_features(solid);
+    const g::PosedPolyhedron box_body{&box_features, solid.template_centroid,
+                                      Quat(solid.template_axes)};
+    const g::PolyhedronFeatures cube = load_aligned("cube");
+    std::mt19937_64 rng(3);
+    std::normal_distribution<double> nd;
+    std::uniform_real_distribution<double> at(-6e-3, 6e-3);
+    std::uniform_real_distribution<double> deep(1e-6, 5e-5);
+    std::vector<g::MeshContact> out;
+    int compared = 0;
+    for (int k = 0; k < 500; ++k) {
+        g::PosedPolyhedron p{&cube, Vec3(at(rng), at(rng), 0.0),
+                             Quat(nd(rng), nd(rng), nd(rng), nd(rng)).normalized()};
+        p.x.z() = -p.support(-Vec3::UnitZ()).z() + p.x.z() - deep(rng);
+        box.polyhedron_contacts(p, out);
+        ASSERT_EQ(out.size(), 1U);
+        const g::PolyhedronContact c = g::polyhedron_contact(p, box_body);
+        ASSERT_TRUE(c.touching);
+        if (c.normal.z() < 1.0 - 1e-12) {
+            continue; // the plane is not the top face (an edge pair won): not comparable
+        }
+        ++compared;
+        EXPECT_NEAR(out[0].depth, c.depth, 1e-12 * cube.radius);
+        EXPECT_NEAR(out[0].patch_area, c.patch_area, 1e-9 * c.patch_area + 1e-20);
+        EXPECT_NEAR((out[0].point - c.point).norm(), 0.0, 1e-7 * cube.radius);
+    }
+    EXPECT_GT(compared, 450);
 }
 
 /// Rebound speed of a sphere (radius r, speed v0 towards the wall) hitting a wall whose contacts
