@@ -27,11 +27,11 @@ inline std::vector<Vec2> hull_2d(std::vector<Vec2> p, double tol) {
     }
     std::vector<Vec2> h(2 * p.size());
     std::size_t k = 0;
-    for (std::size_t i = 0; i < p.size(); ++i) {
-        while (k >= 2 && cross2(h[k - 1] - h[k - 2], p[i] - h[k - 2]) <= tol) {
+    for (const Vec2& q : p) {
+        while (k >= 2 && cross2(h[k - 1] - h[k - 2], q - h[k - 2]) <= tol) {
             --k;
         }
-        h[k++] = p[i];
+        h[k++] = q;
     }
     for (std::size_t i = p.size() - 1, t = k + 1; i > 0; --i) {
         while (k >= t && cross2(h[k - 1] - h[k - 2], p[i - 1] - h[k - 2]) <= tol) {
@@ -59,7 +59,7 @@ inline std::vector<Vec2> clip_convex(std::vector<Vec2> subject, const std::vecto
                 out.push_back(p);
             }
             if ((sp >= 0.0) != (sq >= 0.0)) {
-                out.push_back(p + (q - p) * (sp / (sp - sq)));
+                out.emplace_back(p + (q - p) * (sp / (sp - sq)));
             }
         }
         subject = std::move(out);
@@ -109,8 +109,8 @@ inline void clip_edge(const Vec3& p0, const Vec3& p1, const std::vector<Vec3>& n
             return;
         }
     }
-    out.push_back(p0 + t0 * d);
-    out.push_back(p0 + t1 * d);
+    out.emplace_back(p0 + t0 * d);
+    out.emplace_back(p0 + t1 * d);
 }
 
 /// Area (m^2) and centroid of a counter-clockwise polygon, accumulated: area2 += twice the area,

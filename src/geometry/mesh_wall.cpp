@@ -173,7 +173,7 @@ MeshWall::MeshWall(std::vector<Vec3> vertices, std::vector<std::array<int, 3>> t
         if (facet_of_root[r] < 0) {
             facet_of_root[r] = static_cast<int>(facet_triangles_.size());
             facet_triangles_.emplace_back();
-            facet_normals_.push_back(Vec3::Zero());
+            facet_normals_.emplace_back(Vec3::Zero());
         }
         facet_of_[t] = facet_of_root[r];
         facet_triangles_[static_cast<std::size_t>(facet_of_[t])].push_back(static_cast<int>(t));
@@ -232,8 +232,7 @@ MeshWall::MeshWall(std::vector<Vec3> vertices, std::vector<std::array<int, 3>> t
         for (int i = a[0]; i <= b[0]; ++i) {
             for (int j = a[1]; j <= b[1]; ++j) {
                 for (int k = a[2]; k <= b[2]; ++k) {
-                    bins[static_cast<std::size_t>((k * dims_[1] + j) * dims_[0] + i)].push_back(
-                        static_cast<int>(t));
+                    bins[cell_index(i, j, k)].push_back(static_cast<int>(t));
                 }
             }
         }
@@ -243,6 +242,13 @@ MeshWall::MeshWall(std::vector<Vec3> vertices, std::vector<std::array<int, 3>> t
         cell_start_[c + 1] = cell_start_[c] + static_cast<int>(bins[c].size());
         cell_items_.insert(cell_items_.end(), bins[c].begin(), bins[c].end());
     }
+}
+
+std::size_t MeshWall::cell_index(int i, int j, int k) const {
+    const auto nx = static_cast<std::size_t>(dims_[0]);
+    const auto ny = static_cast<std::size_t>(dims_[1]);
+    return (static_cast<std::size_t>(k) * ny + static_cast<std::size_t>(j)) * nx +
+           static_cast<std::size_t>(i);
 }
 
 std::array<int, 3> MeshWall::cell_of(const Vec3& x) const {
@@ -266,7 +272,7 @@ void MeshWall::candidates(const Vec3& lo, const Vec3& hi, std::vector<int>& out)
     for (int i = a[0]; i <= b[0]; ++i) {
         for (int j = a[1]; j <= b[1]; ++j) {
             for (int k = a[2]; k <= b[2]; ++k) {
-                const auto c = static_cast<std::size_t>((k * dims_[1] + j) * dims_[0] + i);
+                const std::size_t c = cell_index(i, j, k);
                 out.insert(out.end(), cell_items_.begin() + cell_start_[c],
                            cell_items_.begin() + cell_start_[c + 1]);
             }
@@ -466,7 +472,7 @@ void deepest_in_prism(const WorldBody& b, const std::array<Vec3, 3>& t, const Ve
             }
         }
         if (lo <= hi) {
-            clipped.push_back(t0 + lo * n);
+            clipped.emplace_back(t0 + lo * n);
         }
     }
     for (const Vec3& x : clipped) {

@@ -75,6 +75,8 @@ class MeshWall {
     /// Triangles whose bounding boxes overlap the box [lo, hi] (m, world), sorted, unique.
     void candidates(const Vec3& lo, const Vec3& hi, std::vector<int>& out) const;
     [[nodiscard]] std::array<int, 3> cell_of(const Vec3& x) const;
+    /// Flat index of cell (i, j, k).
+    [[nodiscard]] std::size_t cell_index(int i, int j, int k) const;
     /// Feature hierarchy of the sphere contacts: `out` holds the face contacts and receives the
     /// edge and vertex contacts that survive (sphere radius r (m)).
     void thin(std::vector<MeshContact>& out, std::vector<MeshContact>& edges,

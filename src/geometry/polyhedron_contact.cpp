@@ -79,7 +79,7 @@ PolyhedronFeatures polyhedron_features(const ConvexPolyhedron& p) {
         const auto r = static_cast<std::size_t>(find_root(parent, static_cast<int>(t)));
         if (face_of[r] < 0) {
             face_of[r] = static_cast<int>(sum.size());
-            sum.push_back(Vec3::Zero());
+            sum.emplace_back(Vec3::Zero());
         }
         face_of[t] = face_of[r];
         sum[static_cast<std::size_t>(face_of[t])] += area[t];
@@ -255,12 +255,12 @@ PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b,
     c.point = a.x + a.q * point_a;
     c.points.reserve(pts.size());
     for (const Vec3& p : pts) {
-        c.points.push_back(a.x + a.q * p);
+        c.points.emplace_back(a.x + a.q * p);
     }
     if (area2 > 2.0 * area_tol) {
         c.patch.reserve(poly.size());
         for (const Vec2& p : poly) {
-            c.patch.push_back(a.x + a.q * (s * m + p.x() * u + p.y() * v));
+            c.patch.emplace_back(a.x + a.q * (s * m + p.x() * u + p.y() * v));
         }
     }
     return c;

@@ -97,7 +97,7 @@ polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b, bool with
 
 /// Points and patch for a given normal m (unit, from B to A, world frame), as polyhedron_contact
 /// computes them after finding its plane; fills depth (h_A(-m) + h_B(m)), normal, point, points,
-/// patch and patch_area. Used to give EPA results a patch and by the mesh walls.
+/// patch and patch_area. Gives a patch to a normal found otherwise (e.g. by EPA).
 [[nodiscard]] PolyhedronContact contact_patch_along(const PosedPolyhedron& a,
                                                     const PosedPolyhedron& b, const Vec3& m);
 
