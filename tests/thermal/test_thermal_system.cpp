@@ -1,0 +1,193 @@
+#include "core/error.hpp"
+#include "dynamics/system.hpp"
+#include "thermal/thermal_system.hpp"
+
+#include <cmath>
+#include <gtest/gtest.h>
+#include <numbers>
+
+namespace kiln::thermal {
+namespace {
+
+constexpr double radius = 5e-3;
+
+/// Two equal spheres squeezed between two planes x = -L and x = L without gravity: a static
+/// contact pair once the damping has settled it. The pair overlap is 2^(1/3) times the wall
+/// overlap (equal forces, R* = R/2 against R).
+dynamics::SceneSpec squeezed_pair(double wall_overlap) {
+    dynamics::SceneSpec s;
+    s.materials.push_back({"a", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+    s.gravity = Vec3::Zero();
+    s.time_step = 1e-5;
+    const double pair_overlap = std::cbrt(2.0) * wall_overlap;
+    const double l = 2.0 * radius - 0.5 * pair_overlap - wall_overlap;
+    s.walls.push_back({"left", dynamics::PlaneWall{Vec3(-l, 0, 0), Vec3::UnitX()}, 0});
+    s.walls.push_back({"right", dynamics::PlaneWall{Vec3(l, 0, 0), -Vec3::UnitX()}, 0});
+    const double x = radius - 0.5 * pair_overlap;
+    s.particles.push_back({0, radius, Vec3(-x, 0, 0), Vec3::Zero(), Vec3::Zero()});
+    s.particles.push_back({0, radius, Vec3(x, 0, 0), Vec3::Zero(), Vec3::Zero()});
+    return s;
+}
+
+HeatSpec heat_for(const dynamics::SceneSpec& s, heat::HeatModel model, double k) {
+    HeatSpec h;
+    h.enabled = true;
+    h.step_multiple = 100;
+    h.solver.tolerance = 1e-12;
+    MaterialHeat m;
+    m.enabled = true;
+    m.conductivity = k;
+    m.specific_heat = 900;
+    m.initial_temperature = 300;
+    m.model = model;
+    m.spherical = {6, 4, 8};
+    h.materials.assign(s.materials.size(), m);
+    h.particle_temperature = {600.0, 300.0};
+    return h;
+}
+
+TEST(ThermalSystem, LumpedPairEqualisesAtTheContactConductanceRateAndConservesHeat) {
+    const dynamics::SceneSpec s = squeezed_pair(2e-5);
+    dynamics::System sys(s);
+    const HeatSpec h = heat_for(s, heat::HeatModel::lumped, 200.0);
+    ThermalSystem heat(h, sys);
+    const double e0 = heat.thermal_energy();
+    std::vector<dynamics::ContactRecord> contacts;
+    double rate_sum = 0.0; // integral of H (1/C1 + 1/C2) dt along the run (-)
+    const double c = 2700 * 900 * 4.0 / 3.0 * std::numbers::pi * std::pow(radius, 3);
+    for (int k = 0; k < 200000; ++k) {
+        sys.step();
+        if (sys.step_count() % h.step_multiple == 0) {
+            sys.collect_contacts(contacts);
+            for (const auto& rc : contacts) {
+                if (!rc.wall) {
+                    const double r_c = std::sqrt(rc.r_eff * rc.overlap);
+                    rate_sum += 2.0 * 200.0 * r_c * (2.0 / c) * heat.time_step();
+                }
+            }
+            heat.thermal_step(sys);
+        }
+    }
+    ParticleTemperatures t;
+    heat.particle_temperatures(sys, t);
+    // Conservation: pair exchange is antisymmetric, walls adiabatic: rounding only.
+    EXPECT_NEAR(heat.thermal_energy(), e0, 1e-12 * e0);
+    EXPECT_EQ(heat.external_heat(), 0.0);
+    // The difference decays as exp(-integral of H (1/C1 + 1/C2) dt) (lumped two-body problem);
+    // lagged explicit steps with dt H 2/C ~ 1e-3 err by far less than 1 %.
+    const double diff = std::abs(t.mean[0] - t.mean[1]);
+    ASSERT_GT(rate_sum, 0.1); // the test must see real equalisation
+    EXPECT_NEAR(diff / 300.0, std::exp(-rate_sum), 0.01 * std::exp(-rate_sum));
+}
+
+TEST(ThermalSystem, ResolvedPairConservesHeatToSolverTolerance) {
+    const dynamics::SceneSpec s = squeezed_pair(2e-5);
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::resolved, 1.0);
+    ThermalSystem heat(h, sys);
+    const double e0 = heat.thermal_energy();
+    for (int k = 0; k < 20000; ++k) {
+        sys.step();
+        heat.after_step(sys);
+    }
+    EXPECT_GT(heat.counters().thermal_steps, 100);
+    EXPECT_GT(heat.counters().contacts, 100);
+    // Each solve leaves a relative residual below 1e-12 of ||b|| ~ C T / dt: the stored heat
+    // drifts by at most that per step.
+    EXPECT_NEAR(heat.thermal_energy(), e0, 1e-9 * e0);
+    ParticleTemperatures t;
+    heat.particle_temperatures(sys, t);
+    EXPECT_LT(t.mean[0], 600.0);
+    EXPECT_GT(t.mean[1], 300.0);
+    // Thermally thick (k = 1): the surfaces at the contact move, the cores barely.
+    EXPECT_GT(t.core[0], t.mean[0] - 1e-9);
+}
+
+TEST(ThermalSystem, HugeThermalStepSubStepsWithoutOscillation) {
+    const dynamics::SceneSpec s = squeezed_pair(2e-5);
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::lumped, 4e4);
+    h.step_multiple = 50000; // 0.5 s, far above C / H
+    ThermalSystem heat(h, sys);
+    double last = 300.0;
+    for (int k = 0; k < 4; ++k) {
+        for (int n = 0; n < h.step_multiple; ++n) {
+            sys.step();
+        }
+        heat.thermal_step(sys);
+        ParticleTemperatures t;
+        heat.particle_temperatures(sys, t);
+        const double diff = t.mean[0] - t.mean[1];
+        EXPECT_GE(diff, 0.0); // never overshoots
+        EXPECT_LE(diff, last);
+        last = diff;
+    }
+    EXPECT_GT(heat.counters().max_substeps, 1);
+    EXPECT_FALSE(heat.warnings().empty());
+}
+
+TEST(ThermalSystem, HotWallHeatsARestingSphereWithoutOvershoot) {
+    dynamics::SceneSpec s;
+    s.materials.push_back({"a", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+    s.time_step = 1e-5;
+    s.walls.push_back({"floor", dynamics::PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
+    s.particles.push_back({0, radius, Vec3(0, 0, radius), Vec3::Zero(), Vec3::Zero()});
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::resolved, 50.0);
+    h.particle_temperature.clear();
+    h.wall_temperature = {500.0};
+    h.step_multiple = 1000;
+    ThermalSystem heat(h, sys);
+    const double e0 = heat.thermal_energy();
+    for (int k = 0; k < 100000; ++k) {
+        sys.step();
+        heat.after_step(sys);
+    }
+    const auto [lo, hi] = heat.temperature_range();
+    EXPECT_GT(hi, 300.0);
+    EXPECT_LE(hi, 500.0); // heated from a 500 K wall: no cell above it
+    EXPECT_GE(lo, 300.0 - 1e-9);
+    // Heat balance: the stored heat rose by what the wall gave, to solver tolerance.
+    EXPECT_NEAR(heat.thermal_energy() - e0, heat.external_heat(), 1e-8 * e0);
+}
+
+TEST(ThermalSystem, AutoChoosesByBiotNumber) {
+    const dynamics::SceneSpec s = squeezed_pair(2e-5);
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::automatic, 1.0);
+    h.heat_transfer_coefficient = 100.0; // Bi = h r / (3 k) = 1.7e-4 ... with k = 1: 1.7e-1
+    ThermalSystem thick(h, sys);
+    EXPECT_EQ(thick.choices()[0].used, heat::HeatModel::resolved);
+    h.materials[0].conductivity = 100.0; // Bi = 1.7e-3
+    ThermalSystem thin(h, sys);
+    EXPECT_EQ(thin.choices()[0].used, heat::HeatModel::lumped);
+}
+
+TEST(ThermalSystem, LumpedConvectionFollowsTheExponential) {
+    dynamics::SceneSpec s;
+    s.materials.push_back({"a", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+    s.gravity = Vec3::Zero();
+    s.time_step = 1e-4;
+    s.particles.push_back({0, radius, Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::lumped, 200.0);
+    h.particle_temperature.clear();
+    h.heat_transfer_coefficient = 50.0;
+    h.ambient_temperature = 400.0;
+    h.step_multiple = 10;
+    ThermalSystem heat(h, sys);
+    for (int k = 0; k < 200000; ++k) {
+        sys.step();
+        heat.after_step(sys);
+    }
+    const double tau = 2700.0 * 900.0 * radius / (3.0 * 50.0); // rho c V / (h A) (s)
+    const double expected = 400.0 - 100.0 * std::exp(-sys.time() / tau);
+    // Backward Euler with dt / tau = 1e-4: relative error of the decay ~ t dt / (2 tau^2) < 1e-4.
+    EXPECT_NEAR(heat.mean_temperature(sys, 0), expected, 1e-3);
+    EXPECT_NEAR(heat.thermal_energy() -
+                    2700.0 * 900.0 * 4.0 / 3.0 * std::numbers::pi * std::pow(radius, 3) * 300.0,
+                heat.external_heat(), 1e-9 * heat.thermal_energy());
+}
+
+} // namespace
+} // namespace kiln::thermal
