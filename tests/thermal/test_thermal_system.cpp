@@ -3,8 +3,11 @@
 #include "thermal/thermal_system.hpp"
 
 #include <cmath>
+#include <cstdio>
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <numbers>
+#include <string>
 
 namespace kiln::thermal {
 namespace {
@@ -187,6 +190,62 @@ TEST(ThermalSystem, LumpedConvectionFollowsTheExponential) {
     EXPECT_NEAR(heat.thermal_energy() -
                     2700.0 * 900.0 * 4.0 / 3.0 * std::numbers::pi * std::pow(radius, 3) * 300.0,
                 heat.external_heat(), 1e-9 * heat.thermal_energy());
+}
+
+/// A stack of two spheres of radius r on a 600 K floor, convection to 250 K with coefficient h,
+/// conductivities k_low (bottom) and k_high (top): every exchange path at once.
+struct Extreme {
+    double r;             // m
+    double k_low, k_high; // W/(m K)
+    double biot;          // h r / (3 k_low) of the bottom sphere
+    int multiple;         // thermal step / mechanical step
+};
+
+TEST(ThermalSystem, ExtremesStayBoundedAndBalanced) {
+    const Extreme cases[] = {
+        {1e-4, 1e-1, 1e3, 1e-3, 1},    // tiny, contrast 1e4, thin, every step
+        {1e-4, 1e-1, 1e3, 1e3, 2000},  // tiny, thick, huge step (sub-steps)
+        {1e-1, 1e-1, 1e3, 1e3, 1},     // big, thick, tiny step
+        {1e-1, 1e-1, 1e3, 1e-3, 2000}, // big, thin, huge step
+        {1e-2, 1.0, 1.0, 1.0, 200},    // moderate reference
+    };
+    for (const Extreme& x : cases) {
+        dynamics::SceneSpec s;
+        s.materials.push_back({"low", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+        s.materials.push_back({"high", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+        s.time_step = 0.005 * x.r; // s; about 1/20 of the Rayleigh step
+        s.walls.push_back({"floor", dynamics::PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
+        s.particles.push_back({0, x.r, Vec3(0, 0, x.r), Vec3::Zero(), Vec3::Zero()});
+        s.particles.push_back({1, x.r, Vec3(0, 0, 3 * x.r), Vec3::Zero(), Vec3::Zero()});
+        dynamics::System sys(s);
+        HeatSpec h = heat_for(s, heat::HeatModel::resolved, x.k_low);
+        h.materials[1].conductivity = x.k_high;
+        h.particle_temperature = {300.0, 350.0};
+        h.wall_temperature = {600.0};
+        h.ambient_temperature = 250.0;
+        h.heat_transfer_coefficient = x.biot * 3.0 * x.k_low / x.r;
+        h.step_multiple = x.multiple;
+        h.max_substeps = 1 << 20;
+        ThermalSystem heat(h, sys);
+        const double e0 = heat.thermal_energy();
+        for (int k = 0; k < 20000; ++k) {
+            sys.step();
+            heat.after_step(sys);
+        }
+        const auto [lo, hi] = heat.temperature_range();
+        const std::string label =
+            fmt::format("r {} k {}/{} Bi {} x{}", x.r, x.k_low, x.k_high, x.biot, x.multiple);
+        EXPECT_TRUE(std::isfinite(lo) && std::isfinite(hi)) << label;
+        // Bounds of the data (250 K ambient .. 600 K wall): backward Euler with positive
+        // conductances obeys the maximum principle; the lagged exchange keeps it by sub-steps.
+        EXPECT_GE(lo, 250.0 - 1e-6) << label;
+        EXPECT_LE(hi, 600.0 + 1e-6) << label;
+        EXPECT_GT(heat.counters().contacts, 0) << label;
+        std::printf("  %s: T in [%.6g, %.6g] K, lag ratio %.3g, max sub-steps %d\n", label.c_str(),
+                    lo, hi, heat.counters().max_lag_ratio, heat.counters().max_substeps);
+        // Balance: stored heat change = what came from outside, to solver tolerance.
+        EXPECT_NEAR(heat.thermal_energy() - e0, heat.external_heat(), 1e-8 * e0) << label;
+    }
 }
 
 } // namespace

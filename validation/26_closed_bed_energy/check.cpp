@@ -45,7 +45,7 @@ TEST(Validation26, ClosedInsulatedBedConservesHeat) {
     record("thermal steps", static_cast<double>(c.thermal_steps), 0, 0, "-");
     record("conducting contacts (sum over steps)", static_cast<double>(c.contacts), 0, 0, "-");
     record("resolved solves", static_cast<double>(c.solves), 0, 0, "-");
-    record("mean CG iterations", static_cast<double>(c.iterations) / c.solves, 0, 0, "-");
+    record("mean CG iterations", static_cast<double>(c.iterations) / static_cast<double>(c.solves), 0, 0, "-");
     record("max relative drift of sum C T", drift, 0.0, energy_tolerance, "-");
     record("external heat", heat.external_heat(), 0.0, 0.0, "J");
     record("lowest temperature", lo, 300.0, range_tolerance, "K");
