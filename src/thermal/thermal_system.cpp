@@ -237,6 +237,28 @@ double ThermalSystem::capacity_of(const Record& r) const {
     return templates_[static_cast<std::size_t>(r.templ)]->total_capacity;
 }
 
+double ThermalSystem::patch_weight(const Template& t, int patch) const {
+    const heat::BoundaryFace& face = t.grid->boundary[static_cast<std::size_t>(patch)];
+    // Spherical grids: by area (uniform flux over the contact patches, validation 24). Cartesian
+    // cut cells: by cell heat capacity, so every patch cell warms at the same rate; by area a
+    // sliver cut cell (volume fraction ~1e-4, but a full share of the surface) would receive heat
+    // it cannot hold within one lagged step (found by validation 26).
+    return t.spherical ? face.area : t.capacity[static_cast<std::size_t>(face.cell)];
+}
+
+double ThermalSystem::patch_capacity(const Record& r, const std::vector<int>& patches) const {
+    if (r.templ < 0) {
+        return lumped_capacity_[static_cast<std::size_t>(r.slot)];
+    }
+    const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
+    double c = 0.0;
+    for (const int b : patches) {
+        c += t.capacity[static_cast<std::size_t>(
+            t.grid->boundary[static_cast<std::size_t>(b)].cell)];
+    }
+    return c;
+}
+
 double ThermalSystem::contact_temperature(const Record& r, const ContactData& c,
                                           bool side_b) const {
     if (r.templ < 0) {
@@ -249,16 +271,16 @@ double ThermalSystem::contact_temperature(const Record& r, const ContactData& c,
         // The seed's undisturbed temperature (Inv. V L1965) along the rows under the contact.
         return heat::undisturbed_temperature(*t.grid, t.res, f, patches);
     }
-    // Cartesian grids have no radial rows: the area-weighted node temperature of the patch cells
-    // under the contact (closer to the contact than the seed's undisturbed value).
+    // Cartesian grids have no radial rows: the node temperature of the patch cells under the
+    // contact, weighted as the heat is spread (by capacity), i.e. their mean heat content.
     double sum = 0.0;
-    double area = 0.0;
+    double weight = 0.0;
     for (const int b : patches) {
-        const heat::BoundaryFace& face = t.grid->boundary[static_cast<std::size_t>(b)];
-        sum += face.area * f[static_cast<std::size_t>(face.cell)];
-        area += face.area;
+        const double w = patch_weight(t, b);
+        sum += w * f[static_cast<std::size_t>(t.grid->boundary[static_cast<std::size_t>(b)].cell)];
+        weight += w;
     }
-    return sum / area;
+    return sum / weight;
 }
 
 bool ThermalSystem::after_step(const dynamics::System& sys) {
@@ -335,12 +357,14 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
             const auto& g = *templates_[static_cast<std::size_t>(d.b.templ)]->grid;
             d.patches_b = heat::contact_patches(g, rec.point - p.x[rec.j], -rec.normal, rc);
         }
-        const double ca = capacity_of(d.a);
+        // The capacity that answers a lagged contact rate within one step: the whole lumped
+        // particle, or the cells under the contact of a resolved one (a conservative choice: the
+        // implicit conduction inside spreads the heat further during the step).
         g_sum[rec.i] += d.conductance;
-        double pair_rate = d.conductance / ca;
+        double pair_rate = d.conductance / patch_capacity(d.a, d.patches_a);
         if (!rec.wall) {
             g_sum[rec.j] += d.conductance;
-            pair_rate += d.conductance / capacity_of(d.b);
+            pair_rate += d.conductance / patch_capacity(d.b, d.patches_b);
         }
         worst = std::max(worst, pair_rate);
         data_.push_back(std::move(d));
@@ -388,16 +412,15 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
                 lumped_rate_[static_cast<std::size_t>(r.slot)] += q;
                 return;
             }
-            const auto& g = *templates_[static_cast<std::size_t>(r.templ)]->grid;
-            double area = 0.0;
+            const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
+            double total = 0.0;
             for (const int b : patches) {
-                area += g.boundary[static_cast<std::size_t>(b)].area;
+                total += patch_weight(t, b);
             }
             double* rate = face_rate_.data() + face_offset_[static_cast<std::size_t>(r.slot)];
             double given = 0.0;
             for (std::size_t k = 0; k + 1 < patches.size(); ++k) {
-                const double part =
-                    q * (g.boundary[static_cast<std::size_t>(patches[k])].area / area);
+                const double part = q * (patch_weight(t, patches[k]) / total);
                 rate[patches[k]] += part;
                 given += part;
             }

@@ -138,6 +138,8 @@ class ThermalSystem {
     int template_for(int material, double radius);
     heat::ResolvedOperator& operator_for(Template& t, int substeps);
     [[nodiscard]] double capacity_of(const Record& r) const;
+    [[nodiscard]] double patch_weight(const Template& t, int patch) const;
+    [[nodiscard]] double patch_capacity(const Record& r, const std::vector<int>& patches) const;
     [[nodiscard]] double contact_temperature(const Record& r, const ContactData& c,
                                              bool side_j) const;
 

@@ -45,7 +45,10 @@ TEST(Validation26, ClosedInsulatedBedConservesHeat) {
     record("thermal steps", static_cast<double>(c.thermal_steps), 0, 0, "-");
     record("conducting contacts (sum over steps)", static_cast<double>(c.contacts), 0, 0, "-");
     record("resolved solves", static_cast<double>(c.solves), 0, 0, "-");
-    record("mean CG iterations", static_cast<double>(c.iterations) / static_cast<double>(c.solves), 0, 0, "-");
+    record("most sub-steps in a thermal step", c.max_substeps, 0, 0, "-");
+    record("largest lag ratio dt G / C_patch", c.max_lag_ratio, 0, 0, "-");
+    record("mean CG iterations", static_cast<double>(c.iterations) / static_cast<double>(c.solves),
+           0, 0, "-");
     record("max relative drift of sum C T", drift, 0.0, energy_tolerance, "-");
     record("external heat", heat.external_heat(), 0.0, 0.0, "J");
     record("lowest temperature", lo, 300.0, range_tolerance, "K");
@@ -53,7 +56,9 @@ TEST(Validation26, ClosedInsulatedBedConservesHeat) {
     record("final mean temperature", heat.thermal_energy() / heat.heat_capacity(), 0, 0, "K");
     EXPECT_GT(c.contacts, 100000); // many contacts, or the test proves nothing
     EXPECT_LT(drift, energy_tolerance);
-    EXPECT_EQ(heat.external_heat(), 0.0);
+    // No convection, flux or hot wall: the external account holds only the rounding of the
+    // resolved solves' balance (heat_in minus the contact rates), J relative to the stored heat.
+    EXPECT_NEAR(heat.external_heat(), 0.0, 1e-15 * e0);
     EXPECT_GE(lo, 300.0 - range_tolerance);
     EXPECT_LE(hi, 600.0 + range_tolerance);
     EXPECT_EQ(c.unconverged, 0);
