@@ -192,6 +192,51 @@ TEST(ThermalSystem, LumpedConvectionFollowsTheExponential) {
                 heat.external_heat(), 1e-9 * heat.thermal_energy());
 }
 
+TEST(ThermalSystem, PrescribedFluxBalancesAndStagnationHeatsTheUpstreamSide) {
+    dynamics::SceneSpec s;
+    s.materials.push_back({"a", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+    s.gravity = Vec3::Zero();
+    s.time_step = 4e-4; // s; below the Rayleigh step 4.5e-4 s, no contacts
+    s.particles.push_back({0, radius, Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::resolved, 0.5);
+    h.particle_temperature.clear();
+    h.flux = 2000.0; // W/m^2
+    h.heat_transfer_coefficient = 100.0;
+    h.ambient_temperature = 300.0; // = initial: convection only answers the flux
+    h.stagnation = true;
+    h.flow_direction = Vec3(1, 0, 0);
+    h.step_multiple = 100;
+    ThermalSystem heat(h, sys);
+    const double e0 = heat.thermal_energy();
+    for (int k = 0; k < 50000; ++k) { // 20 s
+        sys.step();
+        heat.after_step(sys);
+    }
+    // Balance: stored heat change = flux in + convection, to solver tolerance.
+    EXPECT_NEAR(heat.thermal_energy() - e0, heat.external_heat(), 1e-9 * e0);
+    EXPECT_GT(heat.external_heat(), 0.0);
+    // f(theta) = 2.11 at the stagnation point (facing -x, the upstream side) and 0.63 behind:
+    // with the same flux everywhere the upstream surface, better cooled, stays cooler.
+    const auto views = heat.fields(sys, {});
+    ASSERT_EQ(views.size(), 1U);
+    double up = 0.0;
+    double down = 0.0;
+    double a_up = 0.0;
+    double a_down = 0.0;
+    for (const auto& b : views[0].grid->boundary) {
+        const double t = views[0].field[static_cast<std::size_t>(b.cell)];
+        if (b.centroid.x() < -0.5 * radius) {
+            up += b.area * t;
+            a_up += b.area;
+        } else if (b.centroid.x() > 0.5 * radius) {
+            down += b.area * t;
+            a_down += b.area;
+        }
+    }
+    EXPECT_LT(up / a_up + 1.0, down / a_down); // at least 1 K cooler upstream
+}
+
 /// A stack of two spheres of radius r on a 600 K floor, convection to 250 K with coefficient h,
 /// conductivities k_low (bottom) and k_high (top): every exchange path at once.
 struct Extreme {
