@@ -237,6 +237,43 @@ TEST(ThermalSystem, PrescribedFluxBalancesAndStagnationHeatsTheUpstreamSide) {
     EXPECT_LT(up / a_up + 1.0, down / a_down); // at least 1 K cooler upstream
 }
 
+TEST(ThermalSystem, MixedRadiiAndUnheatedParticlesInOneStack) {
+    dynamics::SceneSpec s;
+    s.materials.push_back({"a", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+    s.materials.push_back({"inert", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+    s.time_step = 1e-5;
+    s.walls.push_back({"floor", dynamics::PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
+    s.particles.push_back({0, 5e-3, Vec3(0, 0, 5e-3), Vec3::Zero(), Vec3::Zero()});
+    s.particles.push_back({0, 3e-3, Vec3(0, 0, 13e-3), Vec3::Zero(), Vec3::Zero()});
+    s.particles.push_back({1, 2e-3, Vec3(0, 0, 18e-3), Vec3::Zero(), Vec3::Zero()});
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::resolved, 5.0);
+    h.materials[1].enabled = false; // no heat table: adiabatic, no temperature
+    h.particle_temperature = {400.0, 300.0, 1000.0};
+    ThermalSystem heat(h, sys);
+    const double e0 = heat.thermal_energy();
+    for (int k = 0; k < 50000; ++k) {
+        sys.step();
+        heat.after_step(sys);
+    }
+    ParticleTemperatures t;
+    heat.particle_temperatures(sys, t);
+    std::vector<double> by_id(3);
+    for (std::size_t i = 0; i < 3; ++i) {
+        by_id[static_cast<std::size_t>(sys.particles().id[i])] = t.mean[i];
+    }
+    EXPECT_LT(by_id[0], 400.0); // the two heated spheres exchange through their contact
+    EXPECT_GT(by_id[1], 300.0);
+    EXPECT_TRUE(std::isnan(by_id[2])); // the inert one has no temperature
+    // Two radii: two templates; the stack conserves heat (floor adiabatic, inert top adiabatic).
+    const auto views = heat.fields(sys, {});
+    ASSERT_EQ(views.size(), 2U);
+    EXPECT_EQ(views[0].grid->size(), views[1].grid->size());
+    EXPECT_NE(views[0].grid->total_volume(), views[1].grid->total_volume());
+    EXPECT_NEAR(heat.thermal_energy(), e0, 1e-10 * e0);
+    EXPECT_GT(heat.counters().contacts, 0);
+}
+
 /// A stack of two spheres of radius r on a 600 K floor, convection to 250 K with coefficient h,
 /// conductivities k_low (bottom) and k_high (top): every exchange path at once.
 struct Extreme {
