@@ -13,6 +13,10 @@
 #include <numbers>
 #include <unordered_map>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 namespace kiln::thermal {
 
 namespace {
@@ -48,8 +52,9 @@ struct ThermalSystem::Template {
     heat::ThermalProperties props;
     heat::SolverSettings solver;
     double base_dt = 0;
-    std::map<int, std::unique_ptr<heat::ResolvedOperator>> ops; // by sub-step count
-    std::vector<double> capacity;                               // per cell (J/K)
+    // Operators by (sub-step count, thread): each holds its own solver workspace.
+    std::map<std::pair<int, int>, std::unique_ptr<heat::ResolvedOperator>> ops;
+    std::vector<double> capacity; // per cell (J/K)
     double total_capacity = 0;
 };
 
@@ -74,6 +79,7 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
         throw InputError("heat: step_multiple must be >= 1");
     }
     dt_ = static_cast<double>(spec_.step_multiple) * sys.dt();
+    threads_ = sys.threads();
     for (const Material& m : mats) {
         material_names_.push_back(m.name);
         density_.push_back(m.density);
@@ -161,17 +167,17 @@ int ThermalSystem::template_for(int material, double radius) {
     t->props.density = density_.at(static_cast<std::size_t>(material));
     t->solver = spec_.solver;
     t->base_dt = dt_;
-    operator_for(*t, 1);
-    t->capacity = t->ops.at(1)->cell_capacity();
-    t->total_capacity = t->ops.at(1)->total_capacity();
+    const heat::ResolvedOperator& first = operator_for(*t, 1, 0);
+    t->capacity = first.cell_capacity();
+    t->total_capacity = first.total_capacity();
     templates_.push_back(std::move(t));
     const int index = static_cast<int>(templates_.size()) - 1;
     template_index_[key] = index;
     return index;
 }
 
-heat::ResolvedOperator& ThermalSystem::operator_for(Template& t, int substeps) {
-    auto& op = t.ops[substeps];
+heat::ResolvedOperator& ThermalSystem::operator_for(Template& t, int substeps, int thread) {
+    auto& op = t.ops[{substeps, thread}];
     if (!op) {
         op = std::make_unique<heat::ResolvedOperator>(
             t.grid, t.props, t.base_dt / static_cast<double>(substeps), t.h_face, t.solver);
@@ -451,22 +457,43 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
                 dt_sub * (h * a * (spec_.ambient_temperature - t_new) + spec_.flux * a);
             lumped_[k] = t_new;
         }
-        // Resolved particles: one backward-Euler solve each with the lagged heat rates.
-        for (int slot = 0; slot < pool_.size(); ++slot) {
+        // Resolved particles: one backward-Euler solve each with the lagged heat rates. The solves
+        // are independent: threads take slots, each with its own operator (built here, outside
+        // the parallel loop); the sums below run in slot order, so results do not depend on the
+        // number of threads.
+        const int n_slots = pool_.size();
+        const int threads = std::max(1, std::min(threads_, n_slots));
+        for (const auto& t : templates_) {
+            for (int th = 0; th < threads; ++th) {
+                operator_for(*t, substeps, th);
+            }
+        }
+        reports_.resize(static_cast<std::size_t>(n_slots));
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 8)
+        for (int slot = 0; slot < n_slots; ++slot) {
+            int th = 0;
+#ifdef _OPENMP
+            th = omp_get_thread_num();
+#endif
             Template& t = *templates_[static_cast<std::size_t>(
                 pool_template_[static_cast<std::size_t>(slot)])];
-            heat::ResolvedOperator& op = operator_for(t, substeps);
-            const std::size_t nb = t.grid->boundary.size();
-            const std::span<const double> rates(
-                face_rate_.data() + face_offset_[static_cast<std::size_t>(slot)], nb);
+            heat::ResolvedOperator& op = *t.ops.at({substeps, th});
             heat::BoundaryLoad load;
             load.ambient = spec_.ambient_temperature;
             load.flux = spec_.flux;
-            load.heat_rate = rates;
-            const heat::StepReport rep = op.step(pool_.field(slot), load);
+            load.heat_rate = std::span<const double>(
+                face_rate_.data() + face_offset_[static_cast<std::size_t>(slot)],
+                t.grid->boundary.size());
+            reports_[static_cast<std::size_t>(slot)] = op.step(pool_.field(slot), load);
+        }
+        for (int slot = 0; slot < n_slots; ++slot) {
+            const heat::StepReport& rep = reports_[static_cast<std::size_t>(slot)];
+            const Template& t = *templates_[static_cast<std::size_t>(
+                pool_template_[static_cast<std::size_t>(slot)])];
+            const double* rates = face_rate_.data() + face_offset_[static_cast<std::size_t>(slot)];
             double contact_in = 0.0;
-            for (const double q : rates) {
-                contact_in += q;
+            for (std::size_t b = 0; b < t.grid->boundary.size(); ++b) {
+                contact_in += rates[b];
             }
             external_heat_ += rep.heat_in - dt_sub * contact_in;
             ++counters_.solves;
@@ -518,7 +545,7 @@ void ThermalSystem::particle_temperatures(const dynamics::System& sys,
         load.ambient = spec_.ambient_temperature;
         load.flux = spec_.flux;
         ts.resize(t.grid->boundary.size());
-        t.ops.begin()->second->surface_temperature(f, load, ts);
+        t.ops.begin()->second->surface_temperature(f, load, ts); // any operator: same G_b
         double sum = 0.0;
         double area = 0.0;
         for (std::size_t b = 0; b < ts.size(); ++b) {

@@ -136,7 +136,7 @@ class ThermalSystem {
 
     void sync(const dynamics::System& sys);
     int template_for(int material, double radius);
-    heat::ResolvedOperator& operator_for(Template& t, int substeps);
+    heat::ResolvedOperator& operator_for(Template& t, int substeps, int thread);
     [[nodiscard]] double capacity_of(const Record& r) const;
     [[nodiscard]] double patch_weight(const Template& t, int patch) const;
     [[nodiscard]] double patch_capacity(const Record& r, const std::vector<int>& patches) const;
@@ -145,6 +145,8 @@ class ThermalSystem {
 
     HeatSpec spec_;
     double dt_ = 0;
+    int threads_ = 1;                       // threads of the resolved solves (System's count)
+    std::vector<heat::StepReport> reports_; // per pool slot, last sub-step
     std::vector<MaterialChoice> choice_;
     std::vector<std::string> material_names_;
     std::vector<double> density_; // kg/m^3 per material

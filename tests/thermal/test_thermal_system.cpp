@@ -274,6 +274,55 @@ TEST(ThermalSystem, MixedRadiiAndUnheatedParticlesInOneStack) {
     EXPECT_GT(heat.counters().contacts, 0);
 }
 
+/// 120 resolved spheres (two materials, spherical and Cartesian grids) poured onto a hot floor.
+dynamics::SceneSpec threaded_bed(int threads) {
+    dynamics::SceneSpec s;
+    s.materials.push_back({"a", 5e6, 0.3, 2500, 0.3, 0.4, 0.0});
+    s.materials.push_back({"b", 5e6, 0.3, 1500, 0.3, 0.4, 0.0});
+    s.time_step = 1e-5;
+    s.threads = threads;
+    s.walls.push_back({"floor", dynamics::PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
+    s.walls.push_back({"tube", dynamics::CylinderWall{Vec3::Zero(), Vec3::UnitZ(), 0.008}, 1});
+    for (int m = 0; m < 2; ++m) {
+        dynamics::InsertSpec ins;
+        ins.material = m;
+        ins.region = {Vec3(-0.005, -0.005, 0.001 + 0.01 * m), Vec3(0.005, 0.005, 0.011 + 0.01 * m)};
+        ins.count = 60;
+        ins.size.radius = 1e-3;
+        ins.velocity = Vec3(0, 0, -0.3);
+        s.inserts.push_back(ins);
+    }
+    return s;
+}
+
+TEST(ThermalSystem, OneAndTwoThreadsGiveTheSameTemperatures) {
+    const auto run = [](int threads) {
+        dynamics::System sys(threaded_bed(threads));
+        HeatSpec h = heat_for(sys.spec(), heat::HeatModel::resolved, 2.0);
+        h.particle_temperature.clear();
+        h.materials[1].grid = GridKind::cartesian;
+        h.materials[1].cells_across = 5;
+        h.materials[1].initial_temperature = 350.0;
+        h.wall_temperature = {500.0, unset};
+        h.solver.tolerance = 1e-8;
+        h.step_multiple = 20;
+        ThermalSystem heat(h, sys);
+        for (int k = 0; k < 3000; ++k) {
+            sys.step();
+            heat.after_step(sys);
+        }
+        ParticleTemperatures t;
+        heat.particle_temperatures(sys, t);
+        return std::make_pair(t.mean, heat.external_heat());
+    };
+    const auto one = run(1);
+    const auto two = run(2);
+    // Tolerance: none. The solves are independent and summed in slot order.
+    EXPECT_EQ(one.first, two.first);
+    EXPECT_EQ(one.second, two.second);
+    EXPECT_GT(one.second, 0.0); // the floor heated the bed
+}
+
 /// A stack of two spheres of radius r on a 600 K floor, convection to 250 K with coefficient h,
 /// conductivities k_low (bottom) and k_high (top): every exchange path at once.
 struct Extreme {
