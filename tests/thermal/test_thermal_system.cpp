@@ -129,6 +129,26 @@ TEST(ThermalSystem, HugeThermalStepSubStepsWithoutOscillation) {
     EXPECT_FALSE(heat.warnings().empty());
 }
 
+TEST(ThermalSystem, StepBeyondTheSubStepCapStopsTheRunWithTheLimit) {
+    const dynamics::SceneSpec s = squeezed_pair(2e-5);
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::lumped, 4e4);
+    h.step_multiple = 50000; // 0.5 s: needs 32 sub-steps (see the test above)
+    h.max_substeps = 4;
+    ThermalSystem heat(h, sys);
+    for (int n = 0; n < h.step_multiple; ++n) {
+        sys.step();
+    }
+    try {
+        heat.thermal_step(sys);
+        FAIL() << "expected a RunError";
+    } catch (const RunError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("lagged contact-coupling limit"), std::string::npos) << what;
+        EXPECT_NE(what.find("step_multiple"), std::string::npos) << what;
+    }
+}
+
 TEST(ThermalSystem, HotWallHeatsARestingSphereWithoutOvershoot) {
     dynamics::SceneSpec s;
     s.materials.push_back({"a", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
