@@ -65,8 +65,12 @@ struct PairRun {
     double h = 0, c = 0;          // conductance (W/K), capacity (J/K)
 };
 
-PairRun run(const Solid& s, heat::HeatModel model) {
+PairRun run(const Solid& s, heat::HeatModel model,
+            const heat::SphericalResolution* grid = nullptr) {
     io::CaseSpec spec = load_case();
+    if (grid != nullptr) {
+        spec.heat.materials[0].spherical = *grid;
+    }
     spec.scene.materials[0].density = s.density;
     spec.heat.materials[0].conductivity = s.k;
     spec.heat.materials[0].specific_heat = s.c_p;
@@ -155,6 +159,24 @@ TEST(Validation25, ContactPairLumpedAndResolved) {
             EXPECT_LT(worst, thin_tolerance);
             EXPECT_LT(std::abs(end_lumped), equalised);
             EXPECT_LT(std::abs(end_resolved), equalised);
+            // The seed's coarse grid, 1 + 10 x 2 x 4 nodes (L2061: "no noticeable deviations ...
+            // even for a resolution of just 2 x 4 x 10 nodes + 1 center node" for aluminium).
+            const heat::SphericalResolution coarse{10, 2, 4};
+            const PairRun c = run(s, heat::HeatModel::resolved, &coarse);
+            double worst_coarse = 0.0;
+            for (std::size_t k = 0; k < lumped.t.size(); ++k) {
+                worst_coarse = std::max(worst_coarse, std::abs(c.diff[k] - lumped.diff[k]) / dt0);
+            }
+            record("aluminium coarse grid (81 cells) max |resolved - lumped| / dT0", worst_coarse,
+                   0.0, thin_tolerance, "- (seed not matched, README)");
+            record("aluminium coarse dT(100 s)", c.diff[0], lumped.diff[0], 0.0,
+                   "K (reference column: lumped)");
+            record("aluminium coarse dT(300 s)", c.diff[2], lumped.diff[2], 0.0,
+                   "K (reference column: lumped)");
+            // Not asserted against the seed's "no noticeable deviation": kiln's coarse grid
+            // deviates by several % (README). Asserted: it still equalises and conserves heat.
+            EXPECT_LT(std::abs(c.diff.back()), equalised);
+            EXPECT_LT(c.energy_drift, energy_tolerance);
         } else {
             // Steel and glass do not equalise within 1000 s (seed).
             EXPECT_GT(end_lumped, 50.0) << m;
