@@ -3,12 +3,14 @@
 #include "core/error.hpp"
 #include "dynamics/system.hpp"
 #include "io/checkpoint.hpp"
+#include "io/field_vtk.hpp"
 #include "io/files.hpp"
 #include "io/monitors.hpp"
 #include "io/progress.hpp"
 #include "io/summary.hpp"
 #include "io/vtk_writer.hpp"
 #include "kiln/version.hpp"
+#include "thermal/thermal_system.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -66,9 +68,34 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
     } catch (const InputError& e) {
         throw InputError(spec.source_file + ": " + e.what());
     }
+    // Heat only when the case has a [heat] section: a scene without heat pays nothing.
+    std::unique_ptr<thermal::ThermalSystem> heat;
+    if (spec.heat.enabled) {
+        try {
+            heat = std::make_unique<thermal::ThermalSystem>(spec.heat, *sys);
+        } catch (const InputError& e) {
+            throw InputError(spec.source_file + ": " + e.what());
+        }
+    }
     if (!opt.restart.empty()) {
         sys->restore_state(io::read_checkpoint(opt.restart));
+        if (heat) {
+            const auto saved = io::read_checkpoint_heat(opt.restart);
+            if (!saved) {
+                throw InputError(opt.restart.string(), 0, "",
+                                 "the checkpoint has no temperatures but the case has [heat]");
+            }
+            heat->restore_state(*saved, *sys);
+        }
     }
+    const auto save_checkpoint = [&] {
+        if (heat) {
+            const thermal::ThermalState hs = heat->save_state();
+            io::write_checkpoint(opt.out_dir / "checkpoint.bin", sys->save_state(), &hs);
+        } else {
+            io::write_checkpoint(opt.out_dir / "checkpoint.bin", sys->save_state());
+        }
+    };
     const auto& ts = sys->time_step_report();
     for (const auto& w : sys->warnings()) {
         fmt::print(stderr, "kiln: warning: {}\n", w);
@@ -87,13 +114,34 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
         fmt::print("  critical step: Rayleigh {:.3g} s, contact time {:.3g} s (dt = {:.2g} of the "
                    "smaller)\n",
                    ts.rayleigh, ts.contact_time, dt / ts.limit);
+        if (heat) {
+            fmt::print("  heat: thermal step {:.3g} s ({} mechanical steps), solver {} (tolerance "
+                       "{:.2g})\n",
+                       heat->time_step(), spec.heat.step_multiple,
+                       heat::to_string(spec.heat.solver.kind), spec.heat.solver.tolerance);
+            for (const auto& line : heat->describe()) {
+                fmt::print("  heat: {}\n", line);
+            }
+        }
     }
 
     // A restart into the folder of the run it continues extends that run's series and monitor
     // rows from the checkpoint on; into a fresh folder it starts them at the checkpoint.
     const bool restarting = !opt.restart.empty();
     io::ParticleSeriesWriter vtk(opt.out_dir);
+    vtk.set_heat(heat.get());
     const std::size_t frames_kept = restarting ? vtk.resume(sys->time()) : 0;
+    std::unique_ptr<io::FieldSeriesWriter> fields;
+    if (heat && spec.heat.field_output) {
+        fields = std::make_unique<io::FieldSeriesWriter>(opt.out_dir, frames_kept);
+    }
+    // A particle frame, and with field output the intra-particle fields at the same time.
+    const auto write_frame = [&] {
+        vtk.write(*sys);
+        if (fields) {
+            fields->write(*sys, *heat, spec.heat.field_particles);
+        }
+    };
     if (!spec.scene.walls.empty()) {
         vtk.write_walls(spec.scene, opt.out_dir / "walls.vtp");
     }
@@ -101,6 +149,7 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
         restarting ? io::MonitorWriter(opt.out_dir / "monitors.csv", spec.output.monitors,
                                        io::ResumePoint{sys->time(), sys->step_count(), mon_every})
                    : io::MonitorWriter(opt.out_dir / "monitors.csv", spec.output.monitors);
+    monitors.set_heat(heat.get());
     io::Progress progress(spec.run.end_time, spec.output.progress && !opt.quiet);
 
     io::RunSummary summary;
@@ -116,7 +165,7 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
 
     const long first = sys->step_count();
     if (vtk_every > 0 && frames_kept == 0) {
-        vtk.write(*sys);
+        write_frame();
     }
     if (monitors.rows() == 0) {
         monitors.write(*sys);
@@ -138,6 +187,9 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
                 break;
             }
             sys->step();
+            if (heat) {
+                heat->after_step(*sys);
+            }
             const long s = sys->step_count();
             if (s % finite_check_every == 0) {
                 sys->check_finite();
@@ -146,10 +198,10 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
                 monitors.write(*sys);
             }
             if (vtk_every > 0 && s % vtk_every == 0) {
-                vtk.write(*sys);
+                write_frame();
             }
             if (ckp_every > 0 && s % ckp_every == 0) {
-                io::write_checkpoint(opt.out_dir / "checkpoint.bin", sys->save_state());
+                save_checkpoint();
             }
             progress.update(sys->time(), s - first);
         }
@@ -157,16 +209,16 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
     } catch (const RunError& e) {
         summary.status = std::string("failed: ") + e.what();
         code = 3;
-        vtk.write(*sys);
+        write_frame();
     }
     if (interrupted) {
         // Nothing is lost: the state at the last step goes to a checkpoint the run can resume from.
         summary.status = fmt::format("interrupted at t = {:.6g} s; resume with --restart {}",
                                      sys->time(), (opt.out_dir / "checkpoint.bin").string());
         code = 130;
-        io::write_checkpoint(opt.out_dir / "checkpoint.bin", sys->save_state());
+        save_checkpoint();
         if (vtk_every > 0) {
-            vtk.write(*sys);
+            write_frame();
         }
     }
     progress.finish();
@@ -183,11 +235,18 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
             : 0.0;
     summary.neighbour_builds = sys->neighbour_builds();
     for (const auto& name : spec.output.monitors) {
-        summary.final_monitors.emplace_back(name, io::monitor_value(*sys, name));
+        summary.final_monitors.emplace_back(name, io::monitor_value(*sys, heat.get(), name));
+    }
+    if (heat) {
+        summary.sections.emplace_back("heat", heat->summary_json());
+        for (const auto& w : heat->warnings()) {
+            summary.warnings.push_back(w);
+            fmt::print(stderr, "kiln: warning: {}\n", w);
+        }
     }
     io::write_summary_json(opt.out_dir / "summary.json", summary);
     if (code == 0 && spec.output.checkpoint_interval > 0.0) {
-        io::write_checkpoint(opt.out_dir / "checkpoint.bin", sys->save_state());
+        save_checkpoint();
     }
 
     if (!opt.quiet) {

@@ -564,6 +564,52 @@ void System::step() {
     time_ = static_cast<double>(step_) * dt;
 }
 
+void System::collect_contacts(std::vector<ContactRecord>& out) const {
+    out.clear();
+    KILN_ASSERT(list_valid_);
+    const auto& nb = nl_.partners();
+    const auto& owner = nl_.owners();
+    // The same touch test as pair_chunk (squared distance below the squared radius sum).
+    for (std::size_t k = 0; k < nb.size(); ++k) {
+        const std::uint32_t i = owner[k];
+        const std::uint32_t j = nb[k];
+        const double rsum = p_.radius[i] + p_.radius[j];
+        const Vec3 d = p_.x[j] - p_.x[i];
+        const double d2 = d.squaredNorm();
+        if (!(d2 < rsum * rsum) || d2 == 0.0) {
+            continue;
+        }
+        const double dist = std::sqrt(d2);
+        ContactRecord c;
+        c.i = i;
+        c.j = j;
+        c.normal = d / dist;
+        c.overlap = rsum - dist;
+        c.point = p_.x[i] + (p_.radius[i] - 0.5 * c.overlap) * c.normal;
+        c.r_eff = p_.radius[i] * p_.radius[j] / rsum;
+        out.push_back(c);
+    }
+    for (std::size_t w = 0; w < spec_.walls.size(); ++w) {
+        for (const std::uint32_t i : wall_candidates_[w]) {
+            const WallContact g = std::visit(
+                [&](const auto& shape) { return wall_contact(shape, p_.x[i], p_.radius[i]); },
+                spec_.walls[w].shape);
+            if (!(g.overlap > 0.0)) {
+                continue;
+            }
+            ContactRecord c;
+            c.i = i;
+            c.j = static_cast<std::uint32_t>(w);
+            c.wall = true;
+            c.normal = -g.n;
+            c.overlap = g.overlap;
+            c.point = p_.x[i] + (p_.radius[i] - 0.5 * g.overlap) * c.normal;
+            c.r_eff = g.r_eff;
+            out.push_back(c);
+        }
+    }
+}
+
 void System::check_finite() const {
     for (std::size_t i = 0; i < p_.size(); ++i) {
         if (!p_.x[i].allFinite() || !p_.v[i].allFinite() || !p_.omega[i].allFinite()) {

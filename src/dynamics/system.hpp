@@ -38,6 +38,17 @@ struct TimeStepReport {
     double limit = 0;        ///< min(rayleigh, contact_time) (s)
 };
 
+/// One touching contact, for the heat coupling (collected on demand, not in the force loop).
+struct ContactRecord {
+    std::uint32_t i = 0;         ///< particle index (current ordering of the store)
+    std::uint32_t j = 0;         ///< partner particle index, or wall index when `wall`
+    bool wall = false;           ///< true for a particle-wall contact
+    Vec3 point = Vec3::Zero();   ///< contact point (m, world): middle of the overlap along n
+    Vec3 normal = Vec3::UnitZ(); ///< unit normal from i towards its partner (world)
+    double overlap = 0;          ///< normal overlap delta > 0 (m)
+    double r_eff = 0;            ///< effective radius of curvature R* (m)
+};
+
 /// Everything that evolves during a run: enough to continue it exactly.
 struct SystemState {
     ParticleStore particles;
@@ -91,6 +102,11 @@ class System {
     [[nodiscard]] long neighbour_builds() const { return nl_.builds(); }
     /// Checks that positions and velocities are finite; throws RunError otherwise.
     void check_finite() const;
+
+    /// Every touching sphere-sphere and sphere-wall contact of the current state (world frame),
+    /// pairs first in neighbour-list order, then walls in wall order. Reads the neighbour list and
+    /// wall candidates only; the mechanics are untouched. `out` is cleared first.
+    void collect_contacts(std::vector<ContactRecord>& out) const;
 
     /// Copies out the full evolving state (checkpoint).
     [[nodiscard]] SystemState save_state() const;

@@ -2,6 +2,7 @@
 #include "io/toml_text.hpp"
 
 #include "core/error.hpp"
+#include "heat/resolved_model.hpp"
 
 #include <cmath>
 #include <fmt/format.h>
@@ -418,11 +419,62 @@ Aabb read_region(Section& s) {
     return box;
 }
 
+/// The optional `heat` table of a material (conductivity, specific heat, model, grid, ...).
+thermal::MaterialHeat read_material_heat(Section& s, const Material& m) {
+    thermal::MaterialHeat h;
+    const toml::table* t = s.table("heat");
+    if (t == nullptr) {
+        return h;
+    }
+    toml::table out_t;
+    Section r(s.file(), *t, s.full("heat"), out_t);
+    h.enabled = true;
+    h.conductivity = r.real("conductivity", std::nullopt, positive(), "W/(m K)");
+    h.specific_heat = r.real("specific_heat", std::nullopt, positive(), "J/(kg K)");
+    h.initial_temperature = r.real("initial_temperature", 293.15, positive(), "K");
+    const std::string model = r.text("model", "lumped", {"none", "lumped", "resolved", "auto"});
+    h.model = model == "none"       ? heat::HeatModel::none
+              : model == "lumped"   ? heat::HeatModel::lumped
+              : model == "resolved" ? heat::HeatModel::resolved
+                                    : heat::HeatModel::automatic;
+    h.grid = r.text("grid", "spherical", {"spherical", "cartesian"}) == "spherical"
+                 ? thermal::GridKind::spherical
+                 : thermal::GridKind::cartesian;
+    h.spherical.n_r = static_cast<int>(r.integer("radial_cells", 10, 1, 1000));
+    h.spherical.n_theta = static_cast<int>(r.integer("polar_cells", 8, 2, 1000));
+    h.spherical.n_phi = static_cast<int>(r.integer("azimuthal_cells", 16, 3, 1000));
+    h.cells_across = static_cast<int>(r.integer("cells_across", 10, 2, 1000));
+    h.real_youngs_modulus = r.real("real_youngs_modulus", m.youngs_modulus, positive(), "Pa");
+    r.finish();
+    s.out().insert_or_assign("heat", std::move(out_t));
+    return h;
+}
+
+/// The optional `temperature` of a wall table (K), for the walls [first, end) it produced.
+void read_wall_temperature(Section& s, CaseSpec& c, std::size_t first) {
+    c.heat.wall_temperature.resize(c.scene.walls.size(), thermal::unset);
+    if (!s.has("temperature")) {
+        return;
+    }
+    const double t = s.real("temperature", std::nullopt, positive(), "K");
+    const auto m = static_cast<std::size_t>(c.scene.walls.at(first).material);
+    if (!c.heat.materials.at(m).enabled) {
+        s.fail_at("temperature",
+                  fmt::format("the wall's material \"{}\" has no heat table; a wall at a "
+                              "temperature conducts through its material's conductivity",
+                              c.scene.materials[m].name));
+    }
+    for (std::size_t w = first; w < c.scene.walls.size(); ++w) {
+        c.heat.wall_temperature[w] = t;
+    }
+}
+
 void read_walls(Section& root, CaseSpec& c, const std::map<std::string, int>& mats) {
     for_each_table(root, "wall", [&](Section& s, std::size_t k) {
         const std::string type = s.text("type", std::nullopt, {"plane", "box", "cylinder"});
         const int mat = material_index(s, "material", mats);
         const std::string name = s.text("name", fmt::format("{}{}", type, k));
+        const std::size_t first_wall = c.scene.walls.size();
         if (type == "plane") {
             dynamics::PlaneWall w;
             w.point = s.vec3("point", std::nullopt, "m");
@@ -449,7 +501,8 @@ void read_walls(Section& root, CaseSpec& c, const std::map<std::string, int>& ma
             w.radius = s.real("radius", std::nullopt, positive(), "m");
             c.scene.walls.push_back({name, w, mat});
         }
-        s.finish({"point", "normal", "min", "max", "axis", "radius"});
+        read_wall_temperature(s, c, first_wall);
+        s.finish({"point", "normal", "min", "max", "axis", "radius", "temperature"});
     });
 }
 
@@ -479,6 +532,84 @@ void read_inserts(Section& root, CaseSpec& c, const std::map<std::string, int>& 
         s.finish({"spacing", "count"});
         c.scene.inserts.push_back(ins);
     });
+}
+
+/// The optional [heat] section; checks that heat data elsewhere has one.
+void read_heat(Section& root, CaseSpec& c, const toml::table& doc) {
+    const toml::table* t = root.table("heat");
+    thermal::HeatSpec& h = c.heat;
+    h.wall_temperature.resize(c.scene.walls.size(), thermal::unset);
+    if (t == nullptr) {
+        // Heat data without a [heat] section is a mistake, not something to ignore silently.
+        const auto refuse = [&](const char* array, const char* key, const char* what) {
+            const toml::array* a = doc[array].as_array();
+            for (std::size_t k = 0; a != nullptr && k < a->size(); ++k) {
+                const toml::table* e = a->get(k)->as_table();
+                if (e != nullptr && e->contains(key)) {
+                    root.fail(fmt::format("{}[{}].{}", array, k, key),
+                              static_cast<long>(e->get(key)->source().begin.line),
+                              fmt::format("{} needs a [heat] section (step_multiple, solver, "
+                                          "ambient, ...); add [heat] or remove it",
+                                          what));
+                }
+            }
+        };
+        refuse("material", "heat", "a material heat table");
+        refuse("wall", "temperature", "a wall temperature");
+        refuse("particle", "temperature", "a particle temperature");
+        return;
+    }
+    toml::table out_t;
+    Section s(root.file(), *t, "heat", out_t);
+    h.enabled = true;
+    h.step_multiple = static_cast<int>(s.integer("step_multiple", 100, 1, 1'000'000'000));
+    const std::string solver = s.text("solver", "cg", {"cg", "bicgstab", "cholmod"});
+    h.solver.kind = solver == "cg"         ? heat::SolverKind::cg
+                    : solver == "bicgstab" ? heat::SolverKind::bicgstab
+                                           : heat::SolverKind::cholmod;
+    if (h.solver.kind == heat::SolverKind::cholmod && !heat::cholmod_available()) {
+        s.fail_at("solver", "\"cholmod\" is not available in this build (no SuiteSparse); "
+                            "allowed: \"cg\", \"bicgstab\"");
+    }
+    h.solver.tolerance = s.real("tolerance", 1e-10, Range{0.0, 1.0, false, false}, "-");
+    h.solver.max_iterations = static_cast<int>(s.integer("max_iterations", 1000, 1, 1'000'000));
+    h.ambient_temperature = s.real("ambient_temperature", 293.15, positive(), "K");
+    h.heat_transfer_coefficient =
+        s.real("heat_transfer_coefficient", 0.0, non_negative(), "W/(m^2 K)");
+    if (s.has("flow_direction")) {
+        h.stagnation = true;
+        h.flow_direction = s.vec3("flow_direction", std::nullopt, "-", true).normalized();
+        if (h.heat_transfer_coefficient == 0.0) {
+            s.fail_at("flow_direction", "distributes the heat transfer coefficient around the "
+                                        "stagnation point: set heat_transfer_coefficient > 0");
+        }
+    }
+    h.flux = s.real("flux", 0.0, Range{}, "W/m^2");
+    h.biot_threshold = s.real("biot_threshold", 0.1, positive(), "-");
+    h.contact_radius = s.text("contact_radius", "hertz", {"hertz", "lens"}) == "hertz"
+                           ? thermal::ContactRadius::hertz
+                           : thermal::ContactRadius::lens;
+    h.max_substeps = static_cast<int>(s.integer("max_substeps", 1024, 1, 1'000'000));
+    h.field_output = s.boolean("field_output", false);
+    if (const toml::node* n = s.take("field_particles")) {
+        const toml::array* a = n->as_array();
+        toml::array arr;
+        for (std::size_t k = 0; a != nullptr && k < a->size(); ++k) {
+            const toml::node* e = a->get(k);
+            if (!e->is_integer() || e->as_integer()->get() < 0) {
+                a = nullptr;
+                break;
+            }
+            h.field_particles.push_back(static_cast<long>(e->as_integer()->get()));
+            arr.push_back(e->as_integer()->get());
+        }
+        if (a == nullptr) {
+            s.fail_at("field_particles", "expected an array of particle ids (integers >= 0)");
+        }
+        out_t.insert_or_assign("field_particles", arr);
+    }
+    s.finish({"flow_direction", "field_particles"});
+    root.out().insert_or_assign("heat", std::move(out_t));
 }
 
 } // namespace
@@ -539,6 +670,7 @@ CaseSpec read_case_text(const std::string& text, const std::string& name) {
         m.restitution = s.real("restitution", std::nullopt, Range{0.0, 1.0, false, true}, "-");
         m.friction = s.real("friction", 0.0, non_negative(), "-");
         m.rolling_friction = s.real("rolling_friction", 0.0, non_negative(), "-");
+        c.heat.materials.push_back(read_material_heat(s, m));
         s.finish();
         mats[m.name] = static_cast<int>(c.scene.materials.size());
         c.scene.materials.push_back(m);
@@ -619,7 +751,10 @@ CaseSpec read_case_text(const std::string& text, const std::string& name) {
         p.x = s.vec3("position", std::nullopt, "m");
         p.v = s.vec3("velocity", Vec3::Zero(), "m/s");
         p.omega = s.vec3("angular_velocity", Vec3::Zero(), "rad/s");
-        s.finish();
+        c.heat.particle_temperature.push_back(
+            s.has("temperature") ? s.real("temperature", std::nullopt, positive(), "K")
+                                 : thermal::unset);
+        s.finish({"temperature"});
         c.scene.particles.push_back(p);
     });
 
@@ -647,6 +782,8 @@ CaseSpec read_case_text(const std::string& text, const std::string& name) {
         s.finish();
         resolved.insert_or_assign("output", std::move(out_t));
     }
+
+    read_heat(root, c, doc);
 
     // [run]
     {

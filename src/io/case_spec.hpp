@@ -2,6 +2,7 @@
 // A whole case: the mechanical scene plus run control and output settings.
 
 #include "dynamics/scene_spec.hpp"
+#include "thermal/heat_spec.hpp"
 
 #include <string>
 #include <vector>
@@ -11,7 +12,8 @@ namespace kiln::io {
 /// Which quantities the CSV monitor file records, one column each, in this order.
 /// Allowed names: time, step, kinetic_energy, rotational_energy, potential_energy, elastic_energy,
 /// total_energy, contacts, wall_contacts, coordination, max_overlap_ratio, max_velocity,
-/// mean_height, max_height, neighbour_builds.
+/// mean_height, max_height, neighbour_builds, and with heat: mean_temperature, min_temperature,
+/// max_temperature, thermal_energy, external_heat.
 struct OutputSpec {
     double vtk_interval = 0;           ///< simulated time between VTK particle files (s), 0 = none
     double monitor_interval = 0;       ///< simulated time between monitor rows (s)
@@ -31,6 +33,7 @@ struct CaseSpec {
     dynamics::SceneSpec scene;
     OutputSpec output;
     RunSpec run;
+    thermal::HeatSpec heat;    ///< heat coupling; heat.enabled is false without a [heat] section
     std::string source_file;   ///< path of the case file
     std::string resolved_toml; ///< the case with every default filled in, as TOML text
 };

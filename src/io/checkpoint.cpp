@@ -113,7 +113,46 @@ template <class IO, class State, class Store> void fields(IO& io, State& s, Stor
 
 } // namespace
 
+/// Tag of the optional heat section after the mechanical state.
+constexpr char heat_magic[8] = {'K', 'I', 'L', 'N', 'H', 'E', 'A', 'T'};
+
+template <class IO, class Heat> void heat_fields(IO& io, Heat& h) {
+    io.vec(h.fields);
+    io.vec(h.lumped);
+    io.vec(h.ids);
+    io.pod(h.external_heat);
+    io.pod(h.counters);
+}
+
 void write_checkpoint(const std::filesystem::path& file, const dynamics::SystemState& s) {
+    write_checkpoint(file, s, nullptr);
+}
+
+std::optional<thermal::ThermalState> read_checkpoint_heat(const std::filesystem::path& file) {
+    std::ifstream f(file, std::ios::binary);
+    if (!f) {
+        throw InputError(file.string(), 0, "", "cannot open the checkpoint file");
+    }
+    char m[sizeof magic] = {};
+    f.read(m, sizeof m);
+    if (!f || std::memcmp(m, magic, sizeof magic) != 0) {
+        throw InputError(file.string(), 0, "", "not a kiln checkpoint (wrong magic bytes)");
+    }
+    dynamics::SystemState s;
+    In in(f, file.string());
+    fields(in, s, s.particles);
+    char h[sizeof heat_magic] = {};
+    f.read(h, sizeof h);
+    if (!f || std::memcmp(h, heat_magic, sizeof heat_magic) != 0) {
+        return std::nullopt;
+    }
+    thermal::ThermalState t;
+    heat_fields(in, t);
+    return t;
+}
+
+void write_checkpoint(const std::filesystem::path& file, const dynamics::SystemState& s,
+                      const thermal::ThermalState* heat) {
     const std::filesystem::path tmp = file.string() + ".tmp";
     {
         std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
@@ -123,6 +162,11 @@ void write_checkpoint(const std::filesystem::path& file, const dynamics::SystemS
         f.write(magic, sizeof magic);
         Out out(f);
         fields(out, s, s.particles);
+        if (heat != nullptr) {
+            f.write(heat_magic, sizeof heat_magic);
+            thermal::ThermalState copy = *heat;
+            heat_fields(out, copy);
+        }
         if (!f) {
             throw InputError(tmp.string(), 0, "", "writing the checkpoint failed (disk full?)");
         }

@@ -33,6 +33,11 @@ enum class Monitor {
     mean_height,
     max_height,
     neighbour_builds,
+    mean_temperature,
+    min_temperature,
+    max_temperature,
+    thermal_energy,
+    external_heat,
     count
 };
 
@@ -56,7 +61,8 @@ struct Heights {
 /// Evaluates monitors of one System state; sums over particles are computed once and shared.
 class Sampler {
   public:
-    explicit Sampler(const dynamics::System& sys) : sys_(sys) {}
+    explicit Sampler(const dynamics::System& sys, const thermal::ThermalSystem* heat = nullptr)
+        : sys_(sys), heat_(heat) {}
 
     /// Value of monitor `m` (SI units).
     double value(Monitor m) {
@@ -92,6 +98,12 @@ class Sampler {
             return heights().max;
         case Monitor::neighbour_builds:
             return static_cast<double>(sys_.neighbour_builds());
+        case Monitor::mean_temperature:
+        case Monitor::min_temperature:
+        case Monitor::max_temperature:
+        case Monitor::thermal_energy:
+        case Monitor::external_heat:
+            return heat_value(m);
         case Monitor::count:
             break;
         }
@@ -100,6 +112,26 @@ class Sampler {
     }
 
   private:
+    /// Heat monitors: capacity-weighted mean, lowest and highest cell temperature (K), stored
+    /// heat sum C T (J), heat from outside so far (J); NaN in a run without heat.
+    [[nodiscard]] double heat_value(Monitor m) const {
+        if (heat_ == nullptr) {
+            return std::numeric_limits<double>::quiet_NaN();
+        }
+        switch (m) {
+        case Monitor::mean_temperature:
+            return heat_->thermal_energy() / heat_->heat_capacity();
+        case Monitor::min_temperature:
+            return heat_->temperature_range().first;
+        case Monitor::max_temperature:
+            return heat_->temperature_range().second;
+        case Monitor::thermal_energy:
+            return heat_->thermal_energy();
+        default:
+            return heat_->external_heat();
+        }
+    }
+
     const dynamics::Energies& energies() {
         if (!have_energies_) {
             energies_ = sys_.energies();
@@ -151,6 +183,7 @@ class Sampler {
     }
 
     const dynamics::System& sys_;
+    const thermal::ThermalSystem* heat_;
     bool have_energies_ = false;
     dynamics::Energies energies_;
     bool have_heights_ = false;
@@ -174,13 +207,24 @@ const std::vector<std::string>& monitor_names() {
                                                    "max_velocity",
                                                    "mean_height",
                                                    "max_height",
-                                                   "neighbour_builds"};
+                                                   "neighbour_builds",
+                                                   "mean_temperature",
+                                                   "min_temperature",
+                                                   "max_temperature",
+                                                   "thermal_energy",
+                                                   "external_heat"};
     KILN_ASSERT(names.size() == static_cast<std::size_t>(Monitor::count));
     return names;
 }
 
 double monitor_value(const dynamics::System& sys, const std::string& name) {
     Sampler s(sys);
+    return s.value(static_cast<Monitor>(monitor_index(name)));
+}
+
+double monitor_value(const dynamics::System& sys, const thermal::ThermalSystem* heat,
+                     const std::string& name) {
+    Sampler s(sys, heat);
     return s.value(static_cast<Monitor>(monitor_index(name)));
 }
 
@@ -271,7 +315,7 @@ std::vector<std::string> MonitorWriter::kept_rows(const ResumePoint& at) const {
 }
 
 void MonitorWriter::write(const dynamics::System& sys) {
-    Sampler s(sys);
+    Sampler s(sys, heat_);
     last_row_.resize(columns_.size());
     for (std::size_t k = 0; k < columns_.size(); ++k) {
         last_row_[k] = s.value(static_cast<Monitor>(columns_[k]));

@@ -4,6 +4,7 @@
 
 #include "dynamics/system.hpp"
 #include "io/case_spec.hpp" // monitor_names()
+#include "thermal/thermal_system.hpp"
 
 #include <cstdio>
 #include <filesystem>
@@ -26,6 +27,12 @@ struct ResumePoint {
 /// an empty system. Throws InputError for a name not in monitor_names().
 double monitor_value(const dynamics::System& sys, const std::string& name);
 
+/// The same with the temperatures of `heat` (may be null): mean_temperature (K, heat-capacity
+/// weighted), min_temperature and max_temperature (K, over all cells), thermal_energy (J, sum C T),
+/// external_heat (J, from convection, flux and walls so far); NaN without heat.
+double monitor_value(const dynamics::System& sys, const thermal::ThermalSystem* heat,
+                     const std::string& name);
+
 /// Writes one CSV column per monitor: a header line with the names, then one row per write() at
 /// full precision (%.10g), flushed at once so a crash loses nothing already written.
 class MonitorWriter {
@@ -43,6 +50,9 @@ class MonitorWriter {
 
     /// Appends one row of the monitors of `sys`; throws InputError when the file cannot be written.
     void write(const dynamics::System& sys);
+
+    /// Temperatures for the heat monitors (null: they are NaN); must outlive the writer's use.
+    void set_heat(const thermal::ThermalSystem* heat) { heat_ = heat; }
 
     /// Values of the last row written, in column order (SI units, see monitor_value).
     [[nodiscard]] const std::vector<double>& last_row() const { return last_row_; }
@@ -73,6 +83,7 @@ class MonitorWriter {
     std::unique_ptr<std::FILE, Closer> out_;
     std::vector<double> last_row_;
     long rows_ = 0;
+    const thermal::ThermalSystem* heat_ = nullptr;
 };
 
 } // namespace kiln::io

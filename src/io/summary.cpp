@@ -77,6 +77,9 @@ void write_summary_json(const std::filesystem::path& file, const RunSummary& s) 
     }
     j += s.warnings.empty() ? "],\n" : "\n  ],\n";
 
+    for (const auto& [key, value] : s.sections) {
+        field(key.c_str(), value);
+    }
     j += "  \"final_monitors\": {";
     for (std::size_t k = 0; k < s.final_monitors.size(); ++k) {
         const auto& [name, value] = s.final_monitors[k];

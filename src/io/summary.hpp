@@ -26,6 +26,8 @@ struct RunSummary {
     double time_step = 0;          ///< mechanical time step (s)
     double rayleigh_time_step = 0; ///< smallest Rayleigh critical step (s)
     double contact_time = 0;       ///< shortest expected contact duration (s)
+    /// Further top-level objects: key and JSON text (e.g. "heat" from thermal::ThermalSystem).
+    std::vector<std::pair<std::string, std::string>> sections;
 };
 
 /// Writes `s` to `file` as pretty-printed JSON (UTF-8, strings escaped, non-finite numbers as

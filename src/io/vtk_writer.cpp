@@ -221,6 +221,23 @@ void ParticleSeriesWriter::write(const dynamics::System& sys) {
     add_vec3_array(data, "velocity", p.v);
     add_vec3_array(data, "angular_velocity", p.omega);
     add_vec3_array(data, "force", p.force);
+    if (heat_ != nullptr) {
+        thermal::ParticleTemperatures t;
+        heat_->particle_temperatures(sys, t);
+        const std::pair<const char*, const std::vector<double>*> arrays[] = {
+            {"temperature_mean", &t.mean},
+            {"temperature_core", &t.core},
+            {"temperature_surface", &t.surface}};
+        for (const auto& [label, values] : arrays) {
+            vtkNew<vtkDoubleArray> a;
+            a->SetName(label);
+            a->SetNumberOfTuples(n);
+            for (vtkIdType k = 0; k < n; ++k) {
+                a->SetValue(k, (*values)[static_cast<std::size_t>(k)]);
+            }
+            data->AddArray(a);
+        }
+    }
 
     const std::string name = fmt::format("particles/particles_{:06d}.vtp", frames_.size());
     write_polydata(pd, dir_ / name);

@@ -4,6 +4,7 @@
 
 #include "dynamics/scene_spec.hpp"
 #include "dynamics/system.hpp"
+#include "thermal/thermal_system.hpp"
 
 #include <filesystem>
 #include <string>
@@ -34,6 +35,11 @@ class ParticleSeriesWriter {
     /// Cell data "wall" is the wall index. Throws InputError when the file cannot be written.
     void write_walls(const dynamics::SceneSpec& scene, const std::filesystem::path& file) const;
 
+    /// Temperatures written with every frame from now on (point data temperature_mean,
+    /// temperature_core, temperature_surface in K; NaN for particles without a heat model).
+    /// `heat` may be null; it must outlive the writer's use.
+    void set_heat(const thermal::ThermalSystem* heat) { heat_ = heat; }
+
     /// Number of particle frames written so far.
     [[nodiscard]] std::size_t frames() const { return frames_.size(); }
 
@@ -48,6 +54,7 @@ class ParticleSeriesWriter {
 
     std::filesystem::path dir_;
     std::vector<Frame> frames_;
+    const thermal::ThermalSystem* heat_ = nullptr;
 };
 
 } // namespace kiln::io

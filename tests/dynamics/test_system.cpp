@@ -215,5 +215,46 @@ TEST(System, OneAndTwoThreadsGiveTheSameBits) {
     EXPECT_EQ(one.counters().max_overlap_ratio, two.counters().max_overlap_ratio);
 }
 
+TEST(System, CollectContactsMatchesTheForceLoopAndLeavesTheMechanicsAlone) {
+    System probe(threaded_pour(1));
+    System plain(threaded_pour(1));
+    std::vector<ContactRecord> contacts;
+    for (int k = 0; k < 2500; ++k) {
+        probe.step();
+        plain.step();
+        if (k % 100 != 99) {
+            continue;
+        }
+        probe.collect_contacts(contacts);
+        long pairs = 0;
+        long walls = 0;
+        const ParticleStore& p = probe.particles();
+        for (const ContactRecord& c : contacts) {
+            walls += c.wall ? 1 : 0;
+            pairs += c.wall ? 0 : 1;
+            EXPECT_GT(c.overlap, 0.0);
+            EXPECT_NEAR(c.normal.norm(), 1.0, 1e-12); // unit normal up to rounding
+            // The contact point lies inside i, r_i - delta/2 from its centre along n.
+            const double reach = (c.point - p.x[c.i]).dot(c.normal);
+            EXPECT_NEAR(reach, p.radius[c.i] - 0.5 * c.overlap, 1e-12);
+            if (!c.wall) {
+                const double gap = (p.x[c.j] - p.x[c.i]).norm();
+                EXPECT_NEAR(c.overlap, p.radius[c.i] + p.radius[c.j] - gap, 1e-15);
+            }
+        }
+        // Same touch test as the force loop: the counts agree exactly.
+        EXPECT_EQ(pairs, probe.counters().particle_contacts);
+        EXPECT_EQ(walls, probe.counters().wall_contacts);
+    }
+    // Tolerance: none; collecting reads the state only.
+    const ParticleStore& a = probe.particles();
+    const ParticleStore& b = plain.particles();
+    std::size_t differing = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        differing += a.x[i] != b.x[i] || a.v[i] != b.v[i] || a.force[i] != b.force[i] ? 1 : 0;
+    }
+    EXPECT_EQ(differing, 0U);
+}
+
 } // namespace
 } // namespace kiln::dynamics

@@ -51,6 +51,63 @@ TEST(Checkpoint, RestartContinuesBitForBit) {
     std::filesystem::remove(file);
 }
 
+/// Heat for pour(): resolved particles, a hot floor (wall 0), convection with f(theta).
+thermal::HeatSpec pour_heat() {
+    thermal::HeatSpec h;
+    h.enabled = true;
+    h.step_multiple = 50;
+    h.solver.tolerance = 1e-8;
+    h.heat_transfer_coefficient = 30.0;
+    h.stagnation = true;
+    h.ambient_temperature = 350.0;
+    thermal::MaterialHeat m;
+    m.enabled = true;
+    m.conductivity = 2.0;
+    m.specific_heat = 800.0;
+    m.initial_temperature = 300.0;
+    m.model = heat::HeatModel::resolved;
+    m.spherical = {3, 4, 6};
+    h.materials = {m};
+    h.wall_temperature = {500.0, thermal::unset};
+    return h;
+}
+
+TEST(Checkpoint, RestartContinuesTemperaturesBitForBit) {
+    const auto file = std::filesystem::temp_directory_path() / "kiln_test_checkpoint_heat.bin";
+    dynamics::System a(pour());
+    thermal::ThermalSystem ha(pour_heat(), a);
+    const auto advance = [](dynamics::System& s, thermal::ThermalSystem& h, int steps) {
+        for (int k = 0; k < steps; ++k) {
+            s.step();
+            h.after_step(s);
+        }
+    };
+    advance(a, ha, 3000);
+    const thermal::ThermalState saved = ha.save_state();
+    write_checkpoint(file, a.save_state(), &saved);
+    advance(a, ha, 3000);
+    dynamics::System b(pour());
+    thermal::ThermalSystem hb(pour_heat(), b);
+    b.restore_state(read_checkpoint(file));
+    const auto restored = read_checkpoint_heat(file);
+    ASSERT_TRUE(restored.has_value());
+    hb.restore_state(*restored, b);
+    advance(b, hb, 3000);
+    thermal::ParticleTemperatures ta;
+    thermal::ParticleTemperatures tb;
+    ha.particle_temperatures(a, ta);
+    hb.particle_temperatures(b, tb);
+    ASSERT_EQ(ta.mean.size(), tb.mean.size());
+    EXPECT_EQ(ta.mean, tb.mean); // exact equality is the point
+    EXPECT_EQ(ta.surface, tb.surface);
+    EXPECT_EQ(ha.thermal_energy(), hb.thermal_energy());
+    EXPECT_GT(ha.temperature_range().second, 300.0); // the hot floor did heat something
+    // A checkpoint without heat has no temperature section.
+    write_checkpoint(file, a.save_state());
+    EXPECT_FALSE(read_checkpoint_heat(file).has_value());
+    std::filesystem::remove(file);
+}
+
 TEST(Checkpoint, ForeignFileIsRefused) {
     const auto file = std::filesystem::temp_directory_path() / "kiln_test_not_a_checkpoint.bin";
     {

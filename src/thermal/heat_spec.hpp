@@ -1,0 +1,67 @@
+#pragma once
+// The heat part of a scene as plain data (what the [heat] section, the per-material heat tables,
+// wall temperatures and particle temperatures of a case file say), validated and with defaults
+// filled in. A scene without heat has `enabled == false` and costs nothing.
+
+#include "core/types.hpp"
+#include "heat/heat_model.hpp"
+#include "heat/resolved_model.hpp"
+#include "heat/spherical_grid.hpp"
+
+#include <limits>
+#include <vector>
+
+namespace kiln::thermal {
+
+/// Grid of a resolved particle type.
+enum class GridKind {
+    spherical, ///< spherical-coordinate grid (spheres only)
+    cartesian, ///< body-fixed cut-cell Cartesian grid (any shape)
+};
+
+/// How the contact radius is derived from the overlap.
+enum class ContactRadius {
+    hertz, ///< sqrt(R* delta) (consistent with the Hertz contact mechanics)
+    lens,  ///< radius of the intersection circle of the undeformed spheres (the seed's r_c)
+};
+
+/// Heat properties of one material; `enabled` is false for a material without a heat table.
+struct MaterialHeat {
+    bool enabled = false;                            ///< the material has heat properties
+    double conductivity = 0;                         ///< k (W/(m K))
+    double specific_heat = 0;                        ///< c_p (J/(kg K))
+    double initial_temperature = 293.15;             ///< initial particle temperature (K)
+    heat::HeatModel model = heat::HeatModel::lumped; ///< requested heat model
+    GridKind grid = GridKind::spherical;             ///< grid of resolved particles
+    heat::SphericalResolution spherical;             ///< resolution of spherical grids
+    int cells_across = 10;                           ///< Cartesian cells across the diameter (-)
+    double real_youngs_modulus = 0; ///< E_real (Pa) for the contact-radius correction
+                                    ///< c = (E_sim / E_real)^(1/5); 0 = c = 1
+};
+
+/// The heat coupling of a run.
+struct HeatSpec {
+    bool enabled = false;                 ///< true when the case has a [heat] section
+    int step_multiple = 100;              ///< thermal step = step_multiple mechanical steps (-)
+    heat::SolverSettings solver;          ///< linear solver of resolved particles
+    double ambient_temperature = 293.15;  ///< fluid temperature for convection (K)
+    double heat_transfer_coefficient = 0; ///< mean h to the ambient (W/(m^2 K)); 0 = insulated
+    bool stagnation = false; ///< distribute h around the stagnation point with the seed's f(theta)
+    Vec3 flow_direction = Vec3::UnitZ(); ///< direction the fluid flows (unit, world)
+    double flux = 0;                     ///< prescribed heat flux into every particle (W/m^2)
+    double biot_threshold = 0.1;         ///< model "auto": lumped below this Biot number (-)
+    ContactRadius contact_radius = ContactRadius::hertz; ///< contact-radius rule
+    int max_substeps = 1024; ///< most sub-steps per thermal step allowed by the lag limit (-)
+    std::vector<MaterialHeat> materials; ///< one per material of the scene, same order
+    /// Temperature of each wall of the scene (K); NaN = adiabatic (no contact conduction).
+    std::vector<double> wall_temperature;
+    /// Initial temperature of each explicitly placed particle (K); NaN = its material's value.
+    std::vector<double> particle_temperature;
+    bool field_output = false;         ///< write intra-particle fields with the VTK frames
+    std::vector<long> field_particles; ///< ids whose fields are written; empty = all resolved
+};
+
+/// Not-a-number, the "not given" value of temperatures above.
+inline constexpr double unset = std::numeric_limits<double>::quiet_NaN();
+
+} // namespace kiln::thermal

@@ -1,0 +1,744 @@
+#include "thermal/thermal_system.hpp"
+
+#include "core/error.hpp"
+#include "heat/cartesian_grid.hpp"
+#include "heat/contact_conduction.hpp"
+#include "heat/convection.hpp"
+#include "heat/shape.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <fmt/format.h>
+#include <numbers>
+#include <unordered_map>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace kiln::thermal {
+
+namespace {
+
+/// Sub-steps are chosen so that dt_sub * (largest contact conductance / heat capacity) stays below
+/// this bound. The lagged exchange is an explicit Euler step of the contact network; at 1 a pair
+/// of lumped particles would equalise in one step, at 0.5 the difference halves per step and can
+/// never change sign (no oscillation, no undershoot below the partner temperatures).
+constexpr double lag_safety = 0.5;
+
+double sphere_volume(double r) {
+    return 4.0 / 3.0 * std::numbers::pi * r * r * r;
+}
+
+double sphere_area(double r) {
+    return 4.0 * std::numbers::pi * r * r;
+}
+
+/// Effective modulus of two bodies, 1 / ((1 - nu1^2) / E1 + (1 - nu2^2) / E2) (Pa).
+double effective_modulus(double e1, double nu1, double e2, double nu2) {
+    return 1.0 / ((1.0 - nu1 * nu1) / e1 + (1.0 - nu2 * nu2) / e2);
+}
+
+} // namespace
+
+struct ThermalSystem::Template {
+    int material = 0;
+    double radius = 0;
+    std::shared_ptr<const heat::ThermalGrid> grid;
+    bool spherical = true;
+    heat::SphericalResolution res;
+    std::vector<double> h_face; // template h per boundary face (W/(m^2 K))
+    heat::ThermalProperties props;
+    heat::SolverSettings solver;
+    double base_dt = 0;
+    // Operators by (sub-step count, thread): each holds its own solver workspace.
+    std::map<std::pair<int, int>, std::unique_ptr<heat::ResolvedOperator>> ops;
+    std::vector<double> capacity; // per cell (J/K)
+    double total_capacity = 0;
+};
+
+/// One conducting contact of the current thermal step, with its patches in each body.
+struct ThermalSystem::ContactData {
+    Record a;                    // particle i
+    Record b;                    // partner j (material -1 for a wall)
+    double conductance = 0;      // H (W/K)
+    double wall_temperature = 0; // K, walls only
+    bool wall = false;
+    std::vector<int> patches_a; // boundary patches of i under the contact (resolved)
+    std::vector<int> patches_b; // of j
+};
+
+ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) : spec_(spec) {
+    const auto& mats = sys.spec().materials;
+    if (spec_.materials.size() != mats.size()) {
+        throw InputError(fmt::format("heat: {} material heat entries for {} materials",
+                                     spec_.materials.size(), mats.size()));
+    }
+    if (spec_.step_multiple < 1) {
+        throw InputError("heat: step_multiple must be >= 1");
+    }
+    dt_ = static_cast<double>(spec_.step_multiple) * sys.dt();
+    threads_ = sys.threads();
+    for (const Material& m : mats) {
+        material_names_.push_back(m.name);
+        density_.push_back(m.density);
+    }
+    spec_.flow_direction = spec_.flow_direction.normalized();
+    spec_.wall_temperature.resize(sys.spec().walls.size(), unset);
+    for (std::size_t w = 0; w < spec_.wall_temperature.size(); ++w) {
+        if (!std::isnan(spec_.wall_temperature[w])) {
+            const auto m = static_cast<std::size_t>(sys.spec().walls[w].material);
+            if (!spec_.materials[m].enabled) {
+                throw InputError(fmt::format(
+                    "heat: wall \"{}\" has a temperature but its material \"{}\" has no heat "
+                    "properties (give the material a heat table with a conductivity)",
+                    sys.spec().walls[w].name, mats[m].name));
+            }
+        }
+    }
+    // Largest radius per material decides "auto" (the thickest particle of the type).
+    const ParticleStore& p = sys.particles();
+    std::vector<double> rmax(mats.size(), 0.0);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        auto& r = rmax[static_cast<std::size_t>(p.material[i])];
+        r = std::max(r, p.radius[i]);
+    }
+    choice_.resize(mats.size());
+    for (std::size_t m = 0; m < mats.size(); ++m) {
+        const MaterialHeat& mh = spec_.materials[m];
+        MaterialChoice& c = choice_[m];
+        if (!mh.enabled) {
+            continue;
+        }
+        c.requested = mh.model;
+        if (rmax[m] > 0.0) {
+            c.biot = heat::biot_number(spec_.heat_transfer_coefficient, sphere_volume(rmax[m]),
+                                       sphere_area(rmax[m]), mh.conductivity);
+        }
+        c.used = heat::choose_model(mh.model, c.biot, spec_.biot_threshold);
+        if (c.used == heat::HeatModel::resolved) {
+            c.grid = mh.grid == GridKind::spherical ? "spherical" : "cartesian";
+        }
+    }
+    sync(sys);
+    for (std::size_t m = 0; m < mats.size(); ++m) {
+        for (const auto& t : templates_) {
+            if (t->material == static_cast<int>(m)) {
+                choice_[m].cells = t->grid->size();
+            }
+        }
+    }
+}
+
+ThermalSystem::~ThermalSystem() = default;
+
+int ThermalSystem::template_for(int material, double radius) {
+    const auto key = std::make_pair(material, std::bit_cast<std::uint64_t>(radius));
+    const auto it = template_index_.find(key);
+    if (it != template_index_.end()) {
+        return it->second;
+    }
+    const MaterialHeat& mh = spec_.materials[static_cast<std::size_t>(material)];
+    auto t = std::make_unique<Template>();
+    t->material = material;
+    t->radius = radius;
+    t->spherical = mh.grid == GridKind::spherical;
+    t->res = mh.spherical;
+    if (t->spherical) {
+        t->grid =
+            std::make_shared<const heat::ThermalGrid>(heat::make_spherical_grid(radius, t->res));
+    } else {
+        heat::CartesianResolution cr;
+        cr.cells_across = mh.cells_across;
+        t->grid = std::make_shared<const heat::ThermalGrid>(
+            heat::make_cartesian_grid(heat::Sphere{radius}, cr));
+    }
+    // Spheres have no orientation yet: body frame = world axes, so the stagnation direction is the
+    // same in every body and the local h goes into the template matrix exactly.
+    if (spec_.heat_transfer_coefficient > 0.0 && spec_.stagnation) {
+        t->h_face = heat::stagnation_distribution(*t->grid, -spec_.flow_direction,
+                                                  spec_.heat_transfer_coefficient);
+    } else if (spec_.heat_transfer_coefficient > 0.0) {
+        t->h_face = {spec_.heat_transfer_coefficient};
+    }
+    t->props.conductivity = mh.conductivity;
+    t->props.heat_capacity = mh.specific_heat;
+    t->props.density = density_.at(static_cast<std::size_t>(material));
+    t->solver = spec_.solver;
+    t->base_dt = dt_;
+    const heat::ResolvedOperator& first = operator_for(*t, 1, 0);
+    t->capacity = first.cell_capacity();
+    t->total_capacity = first.total_capacity();
+    templates_.push_back(std::move(t));
+    const int index = static_cast<int>(templates_.size()) - 1;
+    template_index_[key] = index;
+    return index;
+}
+
+heat::ResolvedOperator& ThermalSystem::operator_for(Template& t, int substeps, int thread) {
+    auto& op = t.ops[{substeps, thread}];
+    if (!op) {
+        op = std::make_unique<heat::ResolvedOperator>(
+            t.grid, t.props, t.base_dt / static_cast<double>(substeps), t.h_face, t.solver);
+    }
+    return *op;
+}
+
+void ThermalSystem::sync(const dynamics::System& sys) {
+    const ParticleStore& p = sys.particles();
+    std::vector<std::pair<std::int64_t, std::size_t>> fresh;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        const auto id = static_cast<std::size_t>(p.id[i]);
+        if (id >= by_id_.size() || by_id_[id].material < 0) {
+            fresh.emplace_back(p.id[i], i);
+        }
+    }
+    if (fresh.empty()) {
+        return;
+    }
+    std::sort(fresh.begin(), fresh.end());
+    by_id_.resize(
+        std::max<std::size_t>(by_id_.size(), static_cast<std::size_t>(fresh.back().first) + 1));
+    radius_.resize(by_id_.size(), 0.0);
+    for (const auto& [id, i] : fresh) {
+        const int m = p.material[i];
+        const MaterialHeat& mh = spec_.materials[static_cast<std::size_t>(m)];
+        Record r;
+        r.material = m;
+        radius_[static_cast<std::size_t>(id)] = p.radius[i];
+        double t0 = mh.initial_temperature;
+        if (static_cast<std::size_t>(id) < spec_.particle_temperature.size() &&
+            !std::isnan(spec_.particle_temperature[static_cast<std::size_t>(id)])) {
+            t0 = spec_.particle_temperature[static_cast<std::size_t>(id)];
+        }
+        const heat::HeatModel used = choice_[static_cast<std::size_t>(m)].used;
+        if (used == heat::HeatModel::lumped) {
+            r.slot = static_cast<int>(lumped_.size());
+            lumped_.push_back(t0);
+            lumped_capacity_.push_back(density_[static_cast<std::size_t>(m)] * mh.specific_heat *
+                                       sphere_volume(p.radius[i]));
+            lumped_area_.push_back(sphere_area(p.radius[i]));
+            lumped_rate_.push_back(0.0);
+        } else if (used == heat::HeatModel::resolved) {
+            r.templ = template_for(m, p.radius[i]);
+            const heat::ThermalGrid& g = *templates_[static_cast<std::size_t>(r.templ)]->grid;
+            r.slot = pool_.add(g.size(), t0);
+            pool_template_.push_back(r.templ);
+            face_offset_.push_back(face_rate_.size());
+            face_rate_.resize(face_rate_.size() + g.boundary.size(), 0.0);
+        }
+        by_id_[static_cast<std::size_t>(id)] = r;
+        slot_ids_.push_back(id);
+    }
+}
+
+double ThermalSystem::capacity_of(const Record& r) const {
+    if (r.slot < 0) {
+        return 0.0;
+    }
+    if (r.templ < 0) {
+        return lumped_capacity_[static_cast<std::size_t>(r.slot)];
+    }
+    return templates_[static_cast<std::size_t>(r.templ)]->total_capacity;
+}
+
+double ThermalSystem::patch_weight(const Template& t, int patch) const {
+    const heat::BoundaryFace& face = t.grid->boundary[static_cast<std::size_t>(patch)];
+    // Spherical grids: by area (uniform flux over the contact patches, validation 24). Cartesian
+    // cut cells: by cell heat capacity, so every patch cell warms at the same rate; by area a
+    // sliver cut cell (volume fraction ~1e-4, but a full share of the surface) would receive heat
+    // it cannot hold within one lagged step (found by validation 26).
+    return t.spherical ? face.area : t.capacity[static_cast<std::size_t>(face.cell)];
+}
+
+double ThermalSystem::patch_capacity(const Record& r, const std::vector<int>& patches) const {
+    if (r.templ < 0) {
+        return lumped_capacity_[static_cast<std::size_t>(r.slot)];
+    }
+    const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
+    double c = 0.0;
+    for (const int b : patches) {
+        c += t.capacity[static_cast<std::size_t>(
+            t.grid->boundary[static_cast<std::size_t>(b)].cell)];
+    }
+    return c;
+}
+
+double ThermalSystem::contact_temperature(const Record& r, const ContactData& c,
+                                          bool side_b) const {
+    if (r.templ < 0) {
+        return lumped_[static_cast<std::size_t>(r.slot)];
+    }
+    const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
+    const std::span<const double> f = pool_.field(r.slot);
+    const std::vector<int>& patches = side_b ? c.patches_b : c.patches_a;
+    if (t.spherical) {
+        // The seed's undisturbed temperature (Inv. V L1965) along the rows under the contact.
+        return heat::undisturbed_temperature(*t.grid, t.res, f, patches);
+    }
+    // Cartesian grids have no radial rows: the node temperature of the patch cells under the
+    // contact, weighted as the heat is spread (by capacity), i.e. their mean heat content.
+    double sum = 0.0;
+    double weight = 0.0;
+    for (const int b : patches) {
+        const double w = patch_weight(t, b);
+        sum += w * f[static_cast<std::size_t>(t.grid->boundary[static_cast<std::size_t>(b)].cell)];
+        weight += w;
+    }
+    return sum / weight;
+}
+
+bool ThermalSystem::after_step(const dynamics::System& sys) {
+    if (sys.step_count() % spec_.step_multiple != 0) {
+        return false;
+    }
+    thermal_step(sys);
+    return true;
+}
+
+void ThermalSystem::thermal_step(const dynamics::System& sys) {
+    sync(sys);
+    const ParticleStore& p = sys.particles();
+    const auto& mats = sys.spec().materials;
+    sys.collect_contacts(contacts_);
+
+    // Conductances and patches of the conducting contacts (geometry fixed for the step).
+    data_.clear();
+    std::vector<double> g_sum(p.size(), 0.0); // W/K per particle index
+    double worst = 0.0;                       // largest conductance / capacity (1/s)
+    for (const dynamics::ContactRecord& rec : contacts_) {
+        ContactData d;
+        d.wall = rec.wall;
+        d.a = by_id_[static_cast<std::size_t>(p.id[rec.i])];
+        if (d.a.slot < 0) {
+            continue;
+        }
+        const double ri = p.radius[rec.i];
+        const Material& mi = mats[static_cast<std::size_t>(d.a.material)];
+        const MaterialHeat& hi = spec_.materials[static_cast<std::size_t>(d.a.material)];
+        int mat_j = 0;
+        double rj = 0.0;
+        if (rec.wall) {
+            d.wall_temperature = spec_.wall_temperature[rec.j];
+            if (std::isnan(d.wall_temperature)) {
+                continue;
+            }
+            mat_j = sys.spec().walls[rec.j].material;
+        } else {
+            d.b = by_id_[static_cast<std::size_t>(p.id[rec.j])];
+            if (d.b.slot < 0) {
+                continue;
+            }
+            mat_j = d.b.material;
+            rj = p.radius[rec.j];
+        }
+        const Material& mj = mats[static_cast<std::size_t>(mat_j)];
+        const MaterialHeat& hj = spec_.materials[static_cast<std::size_t>(mat_j)];
+        double rc = 0.0;
+        if (spec_.contact_radius == ContactRadius::hertz) {
+            rc = std::sqrt(rec.r_eff * rec.overlap);
+        } else if (rec.wall) {
+            // Intersection circle of a sphere with a plane at depth delta.
+            rc = std::sqrt(std::max(0.0, rec.overlap * (2.0 * ri - rec.overlap)));
+        } else {
+            rc = heat::lens_contact_radius(rec.overlap, ri, rj);
+        }
+        // Zhou et al.'s c = (E*_sim / E*_real)^(1/5) (seed Inv. V eq. 12) with the pair's
+        // effective moduli; 1 when both materials use their real modulus.
+        const double ei = hi.real_youngs_modulus > 0.0 ? hi.real_youngs_modulus : mi.youngs_modulus;
+        const double ej = hj.real_youngs_modulus > 0.0 ? hj.real_youngs_modulus : mj.youngs_modulus;
+        const double correction = heat::softened_modulus_correction(
+            effective_modulus(mi.youngs_modulus, mi.poisson_ratio, mj.youngs_modulus,
+                              mj.poisson_ratio),
+            effective_modulus(ei, mi.poisson_ratio, ej, mj.poisson_ratio));
+        d.conductance =
+            heat::static_contact_conductance(hi.conductivity, hj.conductivity, rc, correction);
+        // Patches under the contact disc, in each body frame (identity rotation for spheres).
+        if (d.a.templ >= 0) {
+            const auto& g = *templates_[static_cast<std::size_t>(d.a.templ)]->grid;
+            d.patches_a = heat::contact_patches(g, rec.point - p.x[rec.i], rec.normal, rc);
+        }
+        if (!rec.wall && d.b.templ >= 0) {
+            const auto& g = *templates_[static_cast<std::size_t>(d.b.templ)]->grid;
+            d.patches_b = heat::contact_patches(g, rec.point - p.x[rec.j], -rec.normal, rc);
+        }
+        // The capacity that answers a lagged contact rate within one step: the whole lumped
+        // particle, or the cells under the contact of a resolved one (a conservative choice: the
+        // implicit conduction inside spreads the heat further during the step).
+        g_sum[rec.i] += d.conductance;
+        double pair_rate = d.conductance / patch_capacity(d.a, d.patches_a);
+        if (!rec.wall) {
+            g_sum[rec.j] += d.conductance;
+            pair_rate += d.conductance / patch_capacity(d.b, d.patches_b);
+        }
+        worst = std::max(worst, pair_rate);
+        data_.push_back(std::move(d));
+    }
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        if (g_sum[i] > 0.0) {
+            const Record& r = by_id_[static_cast<std::size_t>(p.id[i])];
+            worst = std::max(worst, g_sum[i] / capacity_of(r));
+        }
+    }
+    // Lag limit: sub-steps (a power of two, so few operators are built) keep
+    // dt_sub * worst <= lag_safety.
+    const double ratio = dt_ * worst;
+    int substeps = 1;
+    while (ratio / substeps > lag_safety) {
+        substeps *= 2;
+        if (substeps > spec_.max_substeps) {
+            throw RunError(sys.step_count(),
+                           fmt::format("heat: the thermal step {:.3g} s is {:.3g} times the lagged "
+                                       "contact-coupling limit {:.3g} s (heat capacity / contact "
+                                       "conductance); more than max_substeps = {} sub-steps "
+                                       "would be needed: lower [heat] step_multiple",
+                                       dt_, ratio / lag_safety, lag_safety / worst,
+                                       spec_.max_substeps));
+        }
+    }
+    counters_.max_lag_ratio = std::max(counters_.max_lag_ratio, ratio);
+    if (substeps > 1 && !warned_lag_) {
+        warned_lag_ = true;
+        warnings_.push_back(fmt::format(
+            "heat: thermal step {:.3g} s exceeds the lagged contact-coupling limit {:.3g} s "
+            "(heat capacity / contact conductance x {}); sub-stepping ({} sub-steps at t = {:.6g} "
+            "s; later steps may use other counts)",
+            dt_, lag_safety / worst, lag_safety, substeps, sys.time()));
+    }
+    const double dt_sub = dt_ / substeps;
+
+    for (int s = 0; s < substeps; ++s) {
+        std::fill(face_rate_.begin(), face_rate_.end(), 0.0);
+        std::fill(lumped_rate_.begin(), lumped_rate_.end(), 0.0);
+        // Lagged contact heat rates from the temperatures at the start of the sub-step; what
+        // leaves one body enters the other (the same number with the opposite sign).
+        const auto add = [&](const Record& r, const std::vector<int>& patches, double q) {
+            if (r.templ < 0) {
+                lumped_rate_[static_cast<std::size_t>(r.slot)] += q;
+                return;
+            }
+            const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
+            double total = 0.0;
+            for (const int b : patches) {
+                total += patch_weight(t, b);
+            }
+            double* rate = face_rate_.data() + face_offset_[static_cast<std::size_t>(r.slot)];
+            double given = 0.0;
+            for (std::size_t k = 0; k + 1 < patches.size(); ++k) {
+                const double part = q * (patch_weight(t, patches[k]) / total);
+                rate[patches[k]] += part;
+                given += part;
+            }
+            rate[patches.back()] += q - given; // the remainder: the parts sum to q exactly
+        };
+        for (const ContactData& d : data_) {
+            const double ta = contact_temperature(d.a, d, false);
+            const double tb = d.wall ? d.wall_temperature : contact_temperature(d.b, d, true);
+            const double q = d.conductance * (tb - ta); // into i
+            add(d.a, d.patches_a, q);
+            if (d.wall) {
+                external_heat_ += q * dt_sub;
+            } else {
+                add(d.b, d.patches_b, -q);
+            }
+        }
+        // Lumped particles: backward Euler with implicit convection (h mean: f(theta) averages
+        // to 1 over a sphere).
+        const double h = spec_.heat_transfer_coefficient;
+        for (std::size_t k = 0; k < lumped_.size(); ++k) {
+            const double c = lumped_capacity_[k];
+            const double a = lumped_area_[k];
+            const double t_old = lumped_[k];
+            const double t_new = (c * t_old + dt_sub * (h * a * spec_.ambient_temperature +
+                                                        spec_.flux * a + lumped_rate_[k])) /
+                                 (c + dt_sub * h * a);
+            external_heat_ +=
+                dt_sub * (h * a * (spec_.ambient_temperature - t_new) + spec_.flux * a);
+            lumped_[k] = t_new;
+        }
+        // Resolved particles: one backward-Euler solve each with the lagged heat rates. The solves
+        // are independent: threads take slots, each with its own operator (built here, outside
+        // the parallel loop); the sums below run in slot order, so results do not depend on the
+        // number of threads.
+        const int n_slots = pool_.size();
+        const int threads = std::max(1, std::min(threads_, n_slots));
+        for (const auto& t : templates_) {
+            for (int th = 0; th < threads; ++th) {
+                operator_for(*t, substeps, th);
+            }
+        }
+        reports_.resize(static_cast<std::size_t>(n_slots));
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 8)
+        for (int slot = 0; slot < n_slots; ++slot) {
+            int th = 0;
+#ifdef _OPENMP
+            th = omp_get_thread_num();
+#endif
+            Template& t = *templates_[static_cast<std::size_t>(
+                pool_template_[static_cast<std::size_t>(slot)])];
+            heat::ResolvedOperator& op = *t.ops.at({substeps, th});
+            heat::BoundaryLoad load;
+            load.ambient = spec_.ambient_temperature;
+            load.flux = spec_.flux;
+            load.heat_rate = std::span<const double>(
+                face_rate_.data() + face_offset_[static_cast<std::size_t>(slot)],
+                t.grid->boundary.size());
+            reports_[static_cast<std::size_t>(slot)] = op.step(pool_.field(slot), load);
+        }
+        for (int slot = 0; slot < n_slots; ++slot) {
+            const heat::StepReport& rep = reports_[static_cast<std::size_t>(slot)];
+            const Template& t = *templates_[static_cast<std::size_t>(
+                pool_template_[static_cast<std::size_t>(slot)])];
+            const double* rates = face_rate_.data() + face_offset_[static_cast<std::size_t>(slot)];
+            double contact_in = 0.0;
+            for (std::size_t b = 0; b < t.grid->boundary.size(); ++b) {
+                contact_in += rates[b];
+            }
+            external_heat_ += rep.heat_in - dt_sub * contact_in;
+            ++counters_.solves;
+            counters_.iterations += rep.solve.iterations;
+            counters_.max_iterations = std::max(counters_.max_iterations, rep.solve.iterations);
+            if (!rep.solve.converged) {
+                ++counters_.unconverged;
+                if (!warned_solver_) {
+                    warned_solver_ = true;
+                    warnings_.push_back(fmt::format(
+                        "heat: a {} solve stopped at the iteration cap ({}) with relative "
+                        "residual {:.3g} (tolerance {:.3g}) at t = {:.6g} s",
+                        heat::to_string(spec_.solver.kind), spec_.solver.max_iterations,
+                        rep.solve.residual, spec_.solver.tolerance, sys.time()));
+                }
+            }
+        }
+    }
+    ++counters_.thermal_steps;
+    counters_.substeps += substeps;
+    counters_.max_substeps = std::max(counters_.max_substeps, substeps);
+    counters_.contacts += static_cast<long>(data_.size());
+}
+
+void ThermalSystem::particle_temperatures(const dynamics::System& sys,
+                                          ParticleTemperatures& out) const {
+    const ParticleStore& p = sys.particles();
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    out.mean.assign(p.size(), nan);
+    out.core.assign(p.size(), nan);
+    out.surface.assign(p.size(), nan);
+    std::vector<double> ts;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        const auto id = static_cast<std::size_t>(p.id[i]);
+        if (id >= by_id_.size() || by_id_[id].slot < 0) {
+            continue;
+        }
+        const Record& r = by_id_[id];
+        if (r.templ < 0) {
+            const double t = lumped_[static_cast<std::size_t>(r.slot)];
+            out.mean[i] = out.core[i] = out.surface[i] = t;
+            continue;
+        }
+        const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
+        const std::span<const double> f = pool_.field(r.slot);
+        out.mean[i] = heat::mean_temperature(*t.grid, f);
+        out.core[i] = f[static_cast<std::size_t>(t.grid->centre_cell)];
+        heat::BoundaryLoad load;
+        load.ambient = spec_.ambient_temperature;
+        load.flux = spec_.flux;
+        ts.resize(t.grid->boundary.size());
+        t.ops.begin()->second->surface_temperature(f, load, ts); // any operator: same G_b
+        double sum = 0.0;
+        double area = 0.0;
+        for (std::size_t b = 0; b < ts.size(); ++b) {
+            sum += t.grid->boundary[b].area * ts[b];
+            area += t.grid->boundary[b].area;
+        }
+        out.surface[i] = sum / area;
+    }
+}
+
+double ThermalSystem::mean_temperature(const dynamics::System& sys, std::size_t i) const {
+    const auto id = static_cast<std::size_t>(sys.particles().id[i]);
+    if (id >= by_id_.size() || by_id_[id].slot < 0) {
+        return std::numeric_limits<double>::quiet_NaN();
+    }
+    const Record& r = by_id_[id];
+    if (r.templ < 0) {
+        return lumped_[static_cast<std::size_t>(r.slot)];
+    }
+    return heat::mean_temperature(*templates_[static_cast<std::size_t>(r.templ)]->grid,
+                                  pool_.field(r.slot));
+}
+
+double ThermalSystem::thermal_energy() const {
+    double e = 0.0;
+    for (std::size_t k = 0; k < lumped_.size(); ++k) {
+        e += lumped_capacity_[k] * lumped_[k];
+    }
+    for (int slot = 0; slot < pool_.size(); ++slot) {
+        const Template& t =
+            *templates_[static_cast<std::size_t>(pool_template_[static_cast<std::size_t>(slot)])];
+        e += heat::stored_heat(t.capacity, pool_.field(slot));
+    }
+    return e;
+}
+
+double ThermalSystem::heat_capacity() const {
+    double c = 0.0;
+    for (const double x : lumped_capacity_) {
+        c += x;
+    }
+    for (int slot = 0; slot < pool_.size(); ++slot) {
+        c += templates_[static_cast<std::size_t>(pool_template_[static_cast<std::size_t>(slot)])]
+                 ->total_capacity;
+    }
+    return c;
+}
+
+std::pair<double, double> ThermalSystem::temperature_range() const {
+    double lo = std::numeric_limits<double>::infinity();
+    double hi = -lo;
+    for (const double t : lumped_) {
+        lo = std::min(lo, t);
+        hi = std::max(hi, t);
+    }
+    for (const double t : pool_.values()) {
+        lo = std::min(lo, t);
+        hi = std::max(hi, t);
+    }
+    return {lo, hi};
+}
+
+std::vector<FieldView> ThermalSystem::fields(const dynamics::System& sys,
+                                             const std::vector<long>& ids) const {
+    const ParticleStore& p = sys.particles();
+    std::vector<FieldView> out;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        const auto id = static_cast<std::size_t>(p.id[i]);
+        if (id >= by_id_.size() || by_id_[id].templ < 0) {
+            continue;
+        }
+        if (!ids.empty() && std::find(ids.begin(), ids.end(), p.id[i]) == ids.end()) {
+            continue;
+        }
+        const Record& r = by_id_[id];
+        const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
+        FieldView v;
+        v.id = p.id[i];
+        v.grid = t.grid.get();
+        v.spherical = t.spherical ? &t.res : nullptr;
+        v.field = pool_.field(r.slot);
+        v.position = p.x[i];
+        out.push_back(v);
+    }
+    std::sort(out.begin(), out.end(),
+              [](const FieldView& a, const FieldView& b) { return a.id < b.id; });
+    return out;
+}
+
+ThermalState ThermalSystem::save_state() const {
+    ThermalState s;
+    s.fields = pool_.values();
+    s.lumped = lumped_;
+    s.ids = slot_ids_;
+    s.external_heat = external_heat_;
+    s.counters = counters_;
+    return s;
+}
+
+void ThermalSystem::restore_state(const ThermalState& s, const dynamics::System& sys) {
+    sync(sys);
+    if (s.ids != slot_ids_ || s.fields.size() != pool_.values().size() ||
+        s.lumped.size() != lumped_.size()) {
+        throw InputError("heat: the checkpoint's temperatures do not fit this case (different "
+                         "particles or heat models); restart with the case that wrote it");
+    }
+    std::size_t at = 0;
+    for (int slot = 0; slot < pool_.size(); ++slot) {
+        const std::span<double> f = pool_.field(slot);
+        std::copy_n(s.fields.begin() + static_cast<std::ptrdiff_t>(at), f.size(), f.begin());
+        at += f.size();
+    }
+    lumped_ = s.lumped;
+    external_heat_ = s.external_heat;
+    counters_ = s.counters;
+}
+
+void ThermalSystem::set_temperature(std::int64_t id, double t) {
+    const Record& r = by_id_.at(static_cast<std::size_t>(id));
+    if (r.slot < 0) {
+        throw InputError(fmt::format("heat: particle {} has no heat model", id));
+    }
+    if (r.templ < 0) {
+        lumped_[static_cast<std::size_t>(r.slot)] = t;
+        return;
+    }
+    const std::span<double> f = pool_.field(r.slot);
+    std::fill(f.begin(), f.end(), t);
+}
+
+std::vector<std::string> ThermalSystem::describe() const {
+    std::vector<std::string> lines;
+    for (std::size_t m = 0; m < choice_.size(); ++m) {
+        const MaterialChoice& c = choice_[m];
+        if (!spec_.materials[m].enabled) {
+            continue;
+        }
+        std::string s =
+            fmt::format("material {}: {} (requested {}, Bi = {:.3g}", material_names_[m],
+                        heat::to_string(c.used), heat::to_string(c.requested), c.biot);
+        if (c.requested == heat::HeatModel::automatic) {
+            s += fmt::format(", threshold {:g}", spec_.biot_threshold);
+        }
+        s += ")";
+        if (c.used == heat::HeatModel::resolved) {
+            s += fmt::format(", {} grid of {} cells", c.grid, c.cells);
+        }
+        lines.push_back(s);
+    }
+    return lines;
+}
+
+std::string ThermalSystem::summary_json() const {
+    const auto num = [](double x) {
+        return std::isfinite(x) ? fmt::format("{}", x) : std::string("null");
+    };
+    std::string j = "{\n";
+    j += fmt::format("    \"thermal_time_step\": {},\n", num(dt_));
+    j += fmt::format("    \"step_multiple\": {},\n", spec_.step_multiple);
+    j += fmt::format("    \"solver\": \"{}\",\n", heat::to_string(spec_.solver.kind));
+    j += fmt::format("    \"tolerance\": {},\n", num(spec_.solver.tolerance));
+    j += "    \"materials\": [";
+    bool first = true;
+    for (std::size_t m = 0; m < choice_.size(); ++m) {
+        if (!spec_.materials[m].enabled) {
+            continue;
+        }
+        const MaterialChoice& c = choice_[m];
+        j += fmt::format("{}\n      {{\"name\": \"{}\", \"requested\": \"{}\", \"used\": \"{}\", "
+                         "\"biot\": {}, \"grid\": \"{}\", \"cells\": {}}}",
+                         first ? "" : ",", material_names_[m], heat::to_string(c.requested),
+                         heat::to_string(c.used), num(c.biot), c.grid, c.cells);
+        first = false;
+    }
+    j += first ? "],\n" : "\n    ],\n";
+    const ThermalCounters& k = counters_;
+    j += fmt::format("    \"thermal_steps\": {},\n", k.thermal_steps);
+    j += fmt::format("    \"substeps\": {},\n", k.substeps);
+    j += fmt::format("    \"max_substeps\": {},\n", k.max_substeps);
+    j += fmt::format("    \"max_lag_ratio\": {},\n", num(k.max_lag_ratio));
+    j += fmt::format("    \"solves\": {},\n", k.solves);
+    j += fmt::format("    \"iterations\": {},\n", k.iterations);
+    j += fmt::format("    \"mean_iterations\": {},\n",
+                     num(k.solves > 0
+                             ? static_cast<double>(k.iterations) / static_cast<double>(k.solves)
+                             : 0.0));
+    j += fmt::format("    \"max_iterations\": {},\n", k.max_iterations);
+    j += fmt::format("    \"unconverged_solves\": {},\n", k.unconverged);
+    j += fmt::format("    \"conducting_contacts\": {},\n", k.contacts);
+    j += fmt::format("    \"thermal_energy\": {},\n", num(thermal_energy()));
+    j += fmt::format("    \"external_heat\": {}\n", num(external_heat_));
+    j += "  }";
+    return j;
+}
+
+} // namespace kiln::thermal

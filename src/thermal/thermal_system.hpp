@@ -1,0 +1,175 @@
+#pragma once
+// Heat in the run loop: the temperatures of every particle of a dynamics::System, advanced every
+// `step_multiple` mechanical steps by the heat library (lumped or resolved per material), coupled
+// through lagged contact conduction (particle-particle and particle-wall), convection to a
+// prescribed ambient and a prescribed surface flux. Theory: docs/theory/heat.md, "Coupling".
+//
+// Frames: contacts come from System::collect_contacts in the world frame and are rotated into a
+// particle's body frame with its orientation before they reach the template grid. Spheres carry no
+// orientation in System today, so the rotation is the identity: a resolved sphere's field does not
+// turn with the sphere (documented limitation until System stores orientations).
+
+#include "dynamics/system.hpp"
+#include "heat/resolved_model.hpp"
+#include "thermal/heat_spec.hpp"
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace kiln::thermal {
+
+/// What a thermal step coupling did, accumulated over the run (for summary.json).
+struct ThermalCounters {
+    long thermal_steps = 0;   ///< thermal steps taken (-)
+    long substeps = 0;        ///< sub-steps taken (>= thermal_steps) (-)
+    int max_substeps = 0;     ///< most sub-steps in one thermal step (-)
+    double max_lag_ratio = 0; ///< largest dt_thermal / lag limit seen (-); > 0.5 means sub-steps
+    long solves = 0;          ///< resolved-particle linear solves (-)
+    long iterations = 0;      ///< iterations of those solves (-)
+    int max_iterations = 0;   ///< most iterations of one solve (-)
+    long unconverged = 0;     ///< solves that hit the iteration cap (-)
+    long contacts = 0;        ///< conducting contacts summed over thermal steps (-)
+};
+
+/// Model actually used per material, decided at start-up.
+struct MaterialChoice {
+    heat::HeatModel requested = heat::HeatModel::none; ///< from the case
+    heat::HeatModel used = heat::HeatModel::none;      ///< after the Biot test of "auto"
+    double biot = 0;                                   ///< h L_c / k of the largest particle (-)
+    int cells = 0;                                     ///< cells per particle (resolved) (-)
+    std::string grid;                                  ///< "spherical", "cartesian" or ""
+};
+
+/// Everything a checkpoint needs to continue the temperatures bit for bit.
+struct ThermalState {
+    std::vector<double> fields;    ///< resolved fields, slot after slot (K)
+    std::vector<double> lumped;    ///< lumped temperatures by slot (K)
+    std::vector<std::int64_t> ids; ///< particle id of every slot record, in slot order
+    double external_heat = 0;      ///< heat that entered from outside so far (J)
+    ThermalCounters counters;      ///< counters so far
+};
+
+/// Per-particle temperatures for output, by particle index of the store (K).
+struct ParticleTemperatures {
+    std::vector<double> mean;    ///< volume mean
+    std::vector<double> core;    ///< centre cell (lumped: the temperature)
+    std::vector<double> surface; ///< area mean of the patch surface temperatures
+};
+
+/// One resolved particle's field with its grid in world position, for field output.
+struct FieldView {
+    std::int64_t id = 0;                                  ///< particle id
+    const heat::ThermalGrid* grid = nullptr;              ///< body-frame grid
+    const heat::SphericalResolution* spherical = nullptr; ///< set for spherical grids
+    std::span<const double> field;                        ///< cell temperatures (K)
+    Vec3 position = Vec3::Zero(); ///< centre (m, world); body frame = world axes (spheres)
+};
+
+/// The temperatures of a System and their coupling.
+class ThermalSystem {
+  public:
+    /// Chooses the model per material, builds the templates and gives every particle of `sys` its
+    /// initial temperature. Throws InputError for inconsistent data (a heated material without
+    /// properties, a hot wall whose material has no conductivity, ...).
+    ThermalSystem(const HeatSpec& spec, const dynamics::System& sys);
+    ~ThermalSystem();
+    ThermalSystem(const ThermalSystem&) = delete;
+    ThermalSystem& operator=(const ThermalSystem&) = delete;
+
+    /// Call after every mechanical step: takes a thermal step when the step count is a multiple
+    /// of step_multiple. Returns true when it did.
+    bool after_step(const dynamics::System& sys);
+
+    /// One thermal step of step_multiple * dt from the current contacts (lagged exchange).
+    void thermal_step(const dynamics::System& sys);
+
+    /// Thermal step length (s).
+    [[nodiscard]] double time_step() const { return dt_; }
+    /// Lines describing the model choice per material (for the start-up log).
+    [[nodiscard]] std::vector<std::string> describe() const;
+    /// The "heat" object of summary.json (a JSON object as text).
+    [[nodiscard]] std::string summary_json() const;
+    /// Warnings so far (lag limit, unconverged solves).
+    [[nodiscard]] const std::vector<std::string>& warnings() const { return warnings_; }
+    /// Choice per material.
+    [[nodiscard]] const std::vector<MaterialChoice>& choices() const { return choice_; }
+    /// Counters so far.
+    [[nodiscard]] const ThermalCounters& counters() const { return counters_; }
+
+    /// Mean, core and surface temperature of every particle (K), by index of sys.particles();
+    /// NaN for particles without a heat model.
+    void particle_temperatures(const dynamics::System& sys, ParticleTemperatures& out) const;
+    /// Volume-mean temperature of particle index `i` (K); NaN without a heat model.
+    [[nodiscard]] double mean_temperature(const dynamics::System& sys, std::size_t i) const;
+    /// Stored heat sum C T of all heated particles relative to 0 K (J).
+    [[nodiscard]] double thermal_energy() const;
+    /// Total heat capacity of the heated particles (J/K).
+    [[nodiscard]] double heat_capacity() const;
+    /// Heat that entered the particles from outside (convection, flux, walls) so far (J).
+    [[nodiscard]] double external_heat() const { return external_heat_; }
+    /// Lowest and highest cell (or lumped) temperature of all particles (K).
+    [[nodiscard]] std::pair<double, double> temperature_range() const;
+
+    /// Resolved fields to write: ids in `ids` (all resolved particles when empty).
+    [[nodiscard]] std::vector<FieldView> fields(const dynamics::System& sys,
+                                                const std::vector<long>& ids) const;
+
+    /// Copies out the evolving state (checkpoint).
+    [[nodiscard]] ThermalState save_state() const;
+    /// Replaces the temperatures with saved ones; call after System::restore_state. Throws
+    /// InputError when the state does not fit this scene.
+    void restore_state(const ThermalState& s, const dynamics::System& sys);
+
+    /// Sets the temperature of particle id `id` uniformly to `t` (K) (tests, set-ups).
+    void set_temperature(std::int64_t id, double t);
+
+  private:
+    struct Template;
+    struct Record {
+        int material = -1;
+        int templ = -1; // template index for resolved, -1 lumped
+        int slot = -1;  // pool slot (resolved) or lumped index; -1 = no heat model
+    };
+    struct ContactData;
+
+    void sync(const dynamics::System& sys);
+    int template_for(int material, double radius);
+    heat::ResolvedOperator& operator_for(Template& t, int substeps, int thread);
+    [[nodiscard]] double capacity_of(const Record& r) const;
+    [[nodiscard]] double patch_weight(const Template& t, int patch) const;
+    [[nodiscard]] double patch_capacity(const Record& r, const std::vector<int>& patches) const;
+    [[nodiscard]] double contact_temperature(const Record& r, const ContactData& c,
+                                             bool side_j) const;
+
+    HeatSpec spec_;
+    double dt_ = 0;
+    int threads_ = 1;                       // threads of the resolved solves (System's count)
+    std::vector<heat::StepReport> reports_; // per pool slot, last sub-step
+    std::vector<MaterialChoice> choice_;
+    std::vector<std::string> material_names_;
+    std::vector<double> density_; // kg/m^3 per material
+    std::vector<std::unique_ptr<Template>> templates_;
+    std::map<std::pair<int, std::uint64_t>, int> template_index_;
+    std::vector<Record> by_id_;  // indexed by particle id
+    std::vector<double> radius_; // by particle id (m)
+    heat::TemperaturePool pool_;
+    std::vector<int> pool_template_;      // template of each pool slot
+    std::vector<double> lumped_;          // lumped temperatures (K)
+    std::vector<double> lumped_capacity_; // rho c V (J/K)
+    std::vector<double> lumped_area_;     // surface area (m^2)
+    std::vector<std::int64_t> slot_ids_;  // id of each record created, in creation order
+    std::vector<dynamics::ContactRecord> contacts_;
+    std::vector<ContactData> data_;
+    std::vector<double> face_rate_;        // heat rate per boundary face of every pool slot (W)
+    std::vector<std::size_t> face_offset_; // first face of each pool slot
+    std::vector<double> lumped_rate_;      // contact heat rate per lumped slot (W)
+    double external_heat_ = 0;
+    ThermalCounters counters_;
+    std::vector<std::string> warnings_;
+    bool warned_lag_ = false;
+    bool warned_solver_ = false;
+};
+
+} // namespace kiln::thermal

@@ -1,0 +1,157 @@
+// Reader tests of the heat keys: [heat], [material.heat], wall and particle temperatures.
+#include "io/case_reader.hpp"
+
+#include "core/error.hpp"
+
+#include <cmath>
+#include <gtest/gtest.h>
+#include <string>
+
+namespace kiln::io {
+namespace {
+
+const std::string base = R"([simulation]
+time_step = 1e-5
+end_time = 0.01
+
+[[material]]
+name = "glass"
+youngs_modulus = 5e6
+poisson_ratio = 0.45
+density = 2500
+restitution = 0.3
+
+[material.heat]
+conductivity = 1.4
+specific_heat = 835
+initial_temperature = 300
+model = "resolved"
+radial_cells = 6
+
+[[material]]
+name = "steel"
+youngs_modulus = 5e6
+poisson_ratio = 0.3
+density = 7900
+restitution = 0.3
+
+[[wall]]
+type = "box"
+material = "glass"
+min = [0, 0, 0]
+max = [0.02, 0.02, 0.04]
+temperature = 600
+
+[[particle]]
+material = "glass"
+radius = 1e-3
+position = [0.01, 0.01, 0.01]
+temperature = 500
+
+[[particle]]
+material = "steel"
+radius = 1e-3
+position = [0.01, 0.01, 0.02]
+
+[heat]
+step_multiple = 50
+solver = "bicgstab"
+heat_transfer_coefficient = 20
+flow_direction = [0, 0, 1]
+)";
+
+std::string edit(const std::string& from, const std::string& to) {
+    std::string s = base;
+    const auto pos = s.find(from);
+    EXPECT_NE(pos, std::string::npos) << from;
+    return s.replace(pos, from.size(), to);
+}
+
+std::string error_of(const std::string& text) {
+    try {
+        read_case_text(text, "case.toml");
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    return "";
+}
+
+TEST(CaseReaderHeat, HeatKeysReadWithDefaults) {
+    const CaseSpec c = read_case_text(base, "case.toml");
+    const thermal::HeatSpec& h = c.heat;
+    EXPECT_TRUE(h.enabled);
+    EXPECT_EQ(h.step_multiple, 50);
+    EXPECT_EQ(h.solver.kind, heat::SolverKind::bicgstab);
+    EXPECT_DOUBLE_EQ(h.solver.tolerance, 1e-10);
+    EXPECT_DOUBLE_EQ(h.ambient_temperature, 293.15);
+    EXPECT_TRUE(h.stagnation);
+    ASSERT_EQ(h.materials.size(), 2U);
+    EXPECT_TRUE(h.materials[0].enabled);
+    EXPECT_FALSE(h.materials[1].enabled); // steel has no heat table: no temperature
+    EXPECT_EQ(h.materials[0].model, heat::HeatModel::resolved);
+    EXPECT_EQ(h.materials[0].spherical.n_r, 6);
+    EXPECT_EQ(h.materials[0].spherical.n_theta, 8);
+    EXPECT_DOUBLE_EQ(h.materials[0].real_youngs_modulus, 5e6); // default: the simulation's
+    ASSERT_EQ(h.wall_temperature.size(), 6U);                  // the box's six planes
+    for (const double t : h.wall_temperature) {
+        EXPECT_DOUBLE_EQ(t, 600.0);
+    }
+    ASSERT_EQ(h.particle_temperature.size(), 2U);
+    EXPECT_DOUBLE_EQ(h.particle_temperature[0], 500.0);
+    EXPECT_TRUE(std::isnan(h.particle_temperature[1]));
+    // The resolved text carries the heat keys with defaults filled in.
+    EXPECT_NE(c.resolved_toml.find("biot_threshold"), std::string::npos);
+    EXPECT_NE(c.resolved_toml.find("azimuthal_cells"), std::string::npos);
+}
+
+TEST(CaseReaderHeat, SceneWithoutHeatHasItDisabled) {
+    const std::string text = base.substr(0, base.find("[heat]"));
+    const std::string no_heat = [&] {
+        std::string s = text;
+        for (const char* key : {"temperature = 600\n", "temperature = 500\n"}) {
+            s.erase(s.find(key), std::string(key).size());
+        }
+        const auto a = s.find("[material.heat]");
+        return s.erase(a, s.find("[[material]]", a) - a);
+    }();
+    const CaseSpec c = read_case_text(no_heat, "case.toml");
+    EXPECT_FALSE(c.heat.enabled);
+}
+
+TEST(CaseReaderHeat, HeatDataWithoutHeatSectionIsLocated) {
+    const std::string text = base.substr(0, base.find("[heat]"));
+    // The wall temperature on line 43 of the text without [heat] comes after the material table:
+    // the first offending key is reported with its line.
+    const std::string e = error_of(text);
+    EXPECT_NE(e.find("case.toml:12: material[0].heat"), std::string::npos) << e;
+    EXPECT_NE(e.find("needs a [heat] section"), std::string::npos) << e;
+}
+
+TEST(CaseReaderHeat, RangesAndChoicesAreChecked) {
+    EXPECT_NE(error_of(edit("conductivity = 1.4", "conductivity = -1"))
+                  .find("case.toml:13: material[0].heat.conductivity: -1 W/(m K) is out of range"),
+              std::string::npos);
+    EXPECT_NE(error_of(edit("model = \"resolved\"", "model = \"fancy\"")).find("\"auto\""),
+              std::string::npos);
+    EXPECT_NE(error_of(edit("step_multiple = 50", "step_multiple = 0")).find("heat.step_multiple"),
+              std::string::npos);
+    EXPECT_NE(error_of(edit("solver = \"bicgstab\"", "solver = \"lu\"")).find("\"cg\""),
+              std::string::npos);
+    EXPECT_NE(error_of(edit("step_multiple = 50", "step_multiple = 50\nbogus = 1"))
+                  .find("heat.bogus: unknown key"),
+              std::string::npos);
+    EXPECT_NE(error_of(edit("heat_transfer_coefficient = 20", "heat_transfer_coefficient = 0"))
+                  .find("heat.flow_direction"),
+              std::string::npos);
+    EXPECT_NE(error_of(edit("radial_cells = 6", "radial_cells = 0")).find("radial_cells"),
+              std::string::npos);
+}
+
+TEST(CaseReaderHeat, HotWallNeedsAMaterialWithConductivity) {
+    const std::string e = error_of(edit("material = \"glass\"\nmin", "material = \"steel\"\nmin"));
+    EXPECT_NE(e.find("wall[0].temperature"), std::string::npos) << e;
+    EXPECT_NE(e.find("no heat table"), std::string::npos) << e;
+}
+
+} // namespace
+} // namespace kiln::io

@@ -1,0 +1,403 @@
+#include "core/error.hpp"
+#include "dynamics/system.hpp"
+#include "thermal/thermal_system.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <numbers>
+#include <string>
+
+namespace kiln::thermal {
+namespace {
+
+constexpr double radius = 5e-3;
+
+/// Two equal spheres squeezed between two planes x = -L and x = L without gravity: a static
+/// contact pair once the damping has settled it. The pair overlap is 2^(1/3) times the wall
+/// overlap (equal forces, R* = R/2 against R).
+dynamics::SceneSpec squeezed_pair(double wall_overlap) {
+    dynamics::SceneSpec s;
+    s.materials.push_back({"a", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+    s.gravity = Vec3::Zero();
+    s.time_step = 1e-5;
+    const double pair_overlap = std::cbrt(2.0) * wall_overlap;
+    const double l = 2.0 * radius - 0.5 * pair_overlap - wall_overlap;
+    s.walls.push_back({"left", dynamics::PlaneWall{Vec3(-l, 0, 0), Vec3::UnitX()}, 0});
+    s.walls.push_back({"right", dynamics::PlaneWall{Vec3(l, 0, 0), -Vec3::UnitX()}, 0});
+    const double x = radius - 0.5 * pair_overlap;
+    s.particles.push_back({0, radius, Vec3(-x, 0, 0), Vec3::Zero(), Vec3::Zero()});
+    s.particles.push_back({0, radius, Vec3(x, 0, 0), Vec3::Zero(), Vec3::Zero()});
+    return s;
+}
+
+HeatSpec heat_for(const dynamics::SceneSpec& s, heat::HeatModel model, double k) {
+    HeatSpec h;
+    h.enabled = true;
+    h.step_multiple = 100;
+    h.solver.tolerance = 1e-12;
+    MaterialHeat m;
+    m.enabled = true;
+    m.conductivity = k;
+    m.specific_heat = 900;
+    m.initial_temperature = 300;
+    m.model = model;
+    m.spherical = {6, 4, 8};
+    h.materials.assign(s.materials.size(), m);
+    h.particle_temperature = {600.0, 300.0};
+    return h;
+}
+
+TEST(ThermalSystem, LumpedPairEqualisesAtTheContactConductanceRateAndConservesHeat) {
+    const dynamics::SceneSpec s = squeezed_pair(2e-5);
+    dynamics::System sys(s);
+    const HeatSpec h = heat_for(s, heat::HeatModel::lumped, 200.0);
+    ThermalSystem heat(h, sys);
+    const double e0 = heat.thermal_energy();
+    std::vector<dynamics::ContactRecord> contacts;
+    double rate_sum = 0.0; // integral of H (1/C1 + 1/C2) dt along the run (-)
+    const double c = 2700 * 900 * 4.0 / 3.0 * std::numbers::pi * std::pow(radius, 3);
+    for (int k = 0; k < 200000; ++k) {
+        sys.step();
+        if (sys.step_count() % h.step_multiple == 0) {
+            sys.collect_contacts(contacts);
+            for (const auto& rc : contacts) {
+                if (!rc.wall) {
+                    const double r_c = std::sqrt(rc.r_eff * rc.overlap);
+                    rate_sum += 2.0 * 200.0 * r_c * (2.0 / c) * heat.time_step();
+                }
+            }
+            heat.thermal_step(sys);
+        }
+    }
+    ParticleTemperatures t;
+    heat.particle_temperatures(sys, t);
+    // Conservation: pair exchange is antisymmetric, walls adiabatic: rounding only.
+    EXPECT_NEAR(heat.thermal_energy(), e0, 1e-12 * e0);
+    EXPECT_EQ(heat.external_heat(), 0.0);
+    // The difference decays as exp(-integral of H (1/C1 + 1/C2) dt) (lumped two-body problem);
+    // lagged explicit steps with dt H 2/C ~ 1e-3 err by far less than 1 %.
+    const double diff = std::abs(t.mean[0] - t.mean[1]);
+    ASSERT_GT(rate_sum, 0.1); // the test must see real equalisation
+    EXPECT_NEAR(diff / 300.0, std::exp(-rate_sum), 0.01 * std::exp(-rate_sum));
+}
+
+TEST(ThermalSystem, ResolvedPairConservesHeatToSolverTolerance) {
+    const dynamics::SceneSpec s = squeezed_pair(2e-5);
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::resolved, 1.0);
+    ThermalSystem heat(h, sys);
+    const double e0 = heat.thermal_energy();
+    for (int k = 0; k < 20000; ++k) {
+        sys.step();
+        heat.after_step(sys);
+    }
+    EXPECT_GT(heat.counters().thermal_steps, 100);
+    EXPECT_GT(heat.counters().contacts, 100);
+    // Each solve leaves a relative residual below 1e-12 of ||b|| ~ C T / dt: the stored heat
+    // drifts by at most that per step.
+    EXPECT_NEAR(heat.thermal_energy(), e0, 1e-9 * e0);
+    ParticleTemperatures t;
+    heat.particle_temperatures(sys, t);
+    EXPECT_LT(t.mean[0], 600.0);
+    EXPECT_GT(t.mean[1], 300.0);
+    // Thermally thick (k = 1): the surfaces at the contact move, the cores barely.
+    EXPECT_GT(t.core[0], t.mean[0] - 1e-9);
+}
+
+TEST(ThermalSystem, HugeThermalStepSubStepsWithoutOscillation) {
+    const dynamics::SceneSpec s = squeezed_pair(2e-5);
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::lumped, 4e4);
+    h.step_multiple = 50000; // 0.5 s, far above C / H
+    ThermalSystem heat(h, sys);
+    double last = 300.0;
+    for (int k = 0; k < 4; ++k) {
+        for (int n = 0; n < h.step_multiple; ++n) {
+            sys.step();
+        }
+        heat.thermal_step(sys);
+        ParticleTemperatures t;
+        heat.particle_temperatures(sys, t);
+        const double diff = t.mean[0] - t.mean[1];
+        EXPECT_GE(diff, 0.0); // never overshoots
+        EXPECT_LE(diff, last);
+        last = diff;
+    }
+    EXPECT_GT(heat.counters().max_substeps, 1);
+    EXPECT_FALSE(heat.warnings().empty());
+}
+
+TEST(ThermalSystem, StepBeyondTheSubStepCapStopsTheRunWithTheLimit) {
+    const dynamics::SceneSpec s = squeezed_pair(2e-5);
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::lumped, 4e4);
+    h.step_multiple = 50000; // 0.5 s: needs 32 sub-steps (see the test above)
+    h.max_substeps = 4;
+    ThermalSystem heat(h, sys);
+    for (int n = 0; n < h.step_multiple; ++n) {
+        sys.step();
+    }
+    try {
+        heat.thermal_step(sys);
+        FAIL() << "expected a RunError";
+    } catch (const RunError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("lagged contact-coupling limit"), std::string::npos) << what;
+        EXPECT_NE(what.find("step_multiple"), std::string::npos) << what;
+    }
+}
+
+TEST(ThermalSystem, HotWallHeatsARestingSphereWithoutOvershoot) {
+    dynamics::SceneSpec s;
+    s.materials.push_back({"a", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+    s.time_step = 1e-5;
+    s.walls.push_back({"floor", dynamics::PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
+    s.particles.push_back({0, radius, Vec3(0, 0, radius), Vec3::Zero(), Vec3::Zero()});
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::resolved, 50.0);
+    h.particle_temperature.clear();
+    h.wall_temperature = {500.0};
+    h.step_multiple = 1000;
+    ThermalSystem heat(h, sys);
+    const double e0 = heat.thermal_energy();
+    for (int k = 0; k < 100000; ++k) {
+        sys.step();
+        heat.after_step(sys);
+    }
+    const auto [lo, hi] = heat.temperature_range();
+    EXPECT_GT(hi, 300.0);
+    EXPECT_LE(hi, 500.0); // heated from a 500 K wall: no cell above it
+    EXPECT_GE(lo, 300.0 - 1e-9);
+    // Heat balance: the stored heat rose by what the wall gave, to solver tolerance.
+    EXPECT_NEAR(heat.thermal_energy() - e0, heat.external_heat(), 1e-8 * e0);
+}
+
+TEST(ThermalSystem, AutoChoosesByBiotNumber) {
+    const dynamics::SceneSpec s = squeezed_pair(2e-5);
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::automatic, 1.0);
+    h.heat_transfer_coefficient = 100.0; // Bi = h r / (3 k) = 1.7e-4 ... with k = 1: 1.7e-1
+    ThermalSystem thick(h, sys);
+    EXPECT_EQ(thick.choices()[0].used, heat::HeatModel::resolved);
+    h.materials[0].conductivity = 100.0; // Bi = 1.7e-3
+    ThermalSystem thin(h, sys);
+    EXPECT_EQ(thin.choices()[0].used, heat::HeatModel::lumped);
+}
+
+TEST(ThermalSystem, LumpedConvectionFollowsTheExponential) {
+    dynamics::SceneSpec s;
+    s.materials.push_back({"a", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+    s.gravity = Vec3::Zero();
+    s.time_step = 1e-4;
+    s.particles.push_back({0, radius, Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::lumped, 200.0);
+    h.particle_temperature.clear();
+    h.heat_transfer_coefficient = 50.0;
+    h.ambient_temperature = 400.0;
+    h.step_multiple = 10;
+    ThermalSystem heat(h, sys);
+    for (int k = 0; k < 200000; ++k) {
+        sys.step();
+        heat.after_step(sys);
+    }
+    const double tau = 2700.0 * 900.0 * radius / (3.0 * 50.0); // rho c V / (h A) (s)
+    const double expected = 400.0 - 100.0 * std::exp(-sys.time() / tau);
+    // Backward Euler with dt / tau = 1e-4: relative error of the decay ~ t dt / (2 tau^2) < 1e-4.
+    EXPECT_NEAR(heat.mean_temperature(sys, 0), expected, 1e-3);
+    EXPECT_NEAR(heat.thermal_energy() -
+                    2700.0 * 900.0 * 4.0 / 3.0 * std::numbers::pi * std::pow(radius, 3) * 300.0,
+                heat.external_heat(), 1e-9 * heat.thermal_energy());
+}
+
+TEST(ThermalSystem, PrescribedFluxBalancesAndStagnationHeatsTheUpstreamSide) {
+    dynamics::SceneSpec s;
+    s.materials.push_back({"a", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+    s.gravity = Vec3::Zero();
+    s.time_step = 4e-4; // s; below the Rayleigh step 4.5e-4 s, no contacts
+    s.particles.push_back({0, radius, Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::resolved, 0.5);
+    h.particle_temperature.clear();
+    h.flux = 2000.0; // W/m^2
+    h.heat_transfer_coefficient = 100.0;
+    h.ambient_temperature = 300.0; // = initial: convection only answers the flux
+    h.stagnation = true;
+    h.flow_direction = Vec3(1, 0, 0);
+    h.step_multiple = 100;
+    ThermalSystem heat(h, sys);
+    const double e0 = heat.thermal_energy();
+    for (int k = 0; k < 50000; ++k) { // 20 s
+        sys.step();
+        heat.after_step(sys);
+    }
+    // Balance: stored heat change = flux in + convection, to solver tolerance.
+    EXPECT_NEAR(heat.thermal_energy() - e0, heat.external_heat(), 1e-9 * e0);
+    EXPECT_GT(heat.external_heat(), 0.0);
+    // f(theta) = 2.11 at the stagnation point (facing -x, the upstream side) and 0.63 behind:
+    // with the same flux everywhere the upstream surface, better cooled, stays cooler.
+    const auto views = heat.fields(sys, {});
+    ASSERT_EQ(views.size(), 1U);
+    double up = 0.0;
+    double down = 0.0;
+    double a_up = 0.0;
+    double a_down = 0.0;
+    for (const auto& b : views[0].grid->boundary) {
+        const double t = views[0].field[static_cast<std::size_t>(b.cell)];
+        if (b.centroid.x() < -0.5 * radius) {
+            up += b.area * t;
+            a_up += b.area;
+        } else if (b.centroid.x() > 0.5 * radius) {
+            down += b.area * t;
+            a_down += b.area;
+        }
+    }
+    EXPECT_LT(up / a_up + 1.0, down / a_down); // at least 1 K cooler upstream
+}
+
+TEST(ThermalSystem, MixedRadiiAndUnheatedParticlesInOneStack) {
+    dynamics::SceneSpec s;
+    s.materials.push_back({"a", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+    s.materials.push_back({"inert", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+    s.time_step = 1e-5;
+    s.walls.push_back({"floor", dynamics::PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
+    s.particles.push_back({0, 5e-3, Vec3(0, 0, 5e-3), Vec3::Zero(), Vec3::Zero()});
+    s.particles.push_back({0, 3e-3, Vec3(0, 0, 13e-3), Vec3::Zero(), Vec3::Zero()});
+    s.particles.push_back({1, 2e-3, Vec3(0, 0, 18e-3), Vec3::Zero(), Vec3::Zero()});
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::resolved, 5.0);
+    h.materials[1].enabled = false; // no heat table: adiabatic, no temperature
+    h.particle_temperature = {400.0, 300.0, 1000.0};
+    ThermalSystem heat(h, sys);
+    const double e0 = heat.thermal_energy();
+    for (int k = 0; k < 50000; ++k) {
+        sys.step();
+        heat.after_step(sys);
+    }
+    ParticleTemperatures t;
+    heat.particle_temperatures(sys, t);
+    std::vector<double> by_id(3);
+    for (std::size_t i = 0; i < 3; ++i) {
+        by_id[static_cast<std::size_t>(sys.particles().id[i])] = t.mean[i];
+    }
+    EXPECT_LT(by_id[0], 400.0); // the two heated spheres exchange through their contact
+    EXPECT_GT(by_id[1], 300.0);
+    EXPECT_TRUE(std::isnan(by_id[2])); // the inert one has no temperature
+    // Two radii: two templates; the stack conserves heat (floor adiabatic, inert top adiabatic).
+    const auto views = heat.fields(sys, {});
+    ASSERT_EQ(views.size(), 2U);
+    EXPECT_EQ(views[0].grid->size(), views[1].grid->size());
+    EXPECT_NE(views[0].grid->total_volume(), views[1].grid->total_volume());
+    EXPECT_NEAR(heat.thermal_energy(), e0, 1e-10 * e0);
+    EXPECT_GT(heat.counters().contacts, 0);
+}
+
+/// 120 resolved spheres (two materials, spherical and Cartesian grids) poured onto a hot floor.
+dynamics::SceneSpec threaded_bed(int threads) {
+    dynamics::SceneSpec s;
+    s.materials.push_back({"a", 5e6, 0.3, 2500, 0.3, 0.4, 0.0});
+    s.materials.push_back({"b", 5e6, 0.3, 1500, 0.3, 0.4, 0.0});
+    s.time_step = 1e-5;
+    s.threads = threads;
+    s.walls.push_back({"floor", dynamics::PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
+    s.walls.push_back({"tube", dynamics::CylinderWall{Vec3::Zero(), Vec3::UnitZ(), 0.008}, 1});
+    for (int m = 0; m < 2; ++m) {
+        dynamics::InsertSpec ins;
+        ins.material = m;
+        ins.region = {Vec3(-0.005, -0.005, 0.001 + 0.01 * m), Vec3(0.005, 0.005, 0.011 + 0.01 * m)};
+        ins.count = 60;
+        ins.size.radius = 1e-3;
+        ins.velocity = Vec3(0, 0, -0.3);
+        s.inserts.push_back(ins);
+    }
+    return s;
+}
+
+TEST(ThermalSystem, OneAndTwoThreadsGiveTheSameTemperatures) {
+    const auto run = [](int threads) {
+        dynamics::System sys(threaded_bed(threads));
+        HeatSpec h = heat_for(sys.spec(), heat::HeatModel::resolved, 2.0);
+        h.particle_temperature.clear();
+        h.materials[1].grid = GridKind::cartesian;
+        h.materials[1].cells_across = 5;
+        h.materials[1].initial_temperature = 350.0;
+        h.wall_temperature = {500.0, unset};
+        h.solver.tolerance = 1e-8;
+        h.step_multiple = 20;
+        ThermalSystem heat(h, sys);
+        for (int k = 0; k < 3000; ++k) {
+            sys.step();
+            heat.after_step(sys);
+        }
+        ParticleTemperatures t;
+        heat.particle_temperatures(sys, t);
+        return std::make_pair(t.mean, heat.external_heat());
+    };
+    const auto one = run(1);
+    const auto two = run(2);
+    // Tolerance: none. The solves are independent and summed in slot order.
+    EXPECT_EQ(one.first, two.first);
+    EXPECT_EQ(one.second, two.second);
+    EXPECT_GT(one.second, 0.0); // the floor heated the bed
+}
+
+/// A stack of two spheres of radius r on a 600 K floor, convection to 250 K with coefficient h,
+/// conductivities k_low (bottom) and k_high (top): every exchange path at once.
+struct Extreme {
+    double r;             // m
+    double k_low, k_high; // W/(m K)
+    double biot;          // h r / (3 k_low) of the bottom sphere
+    int multiple;         // thermal step / mechanical step
+};
+
+TEST(ThermalSystem, ExtremesStayBoundedAndBalanced) {
+    const Extreme cases[] = {
+        {1e-4, 1e-1, 1e3, 1e-3, 1},    // tiny, contrast 1e4, thin, every step
+        {1e-4, 1e-1, 1e3, 1e3, 2000},  // tiny, thick, huge step (sub-steps)
+        {1e-1, 1e-1, 1e3, 1e3, 1},     // big, thick, tiny step
+        {1e-1, 1e-1, 1e3, 1e-3, 2000}, // big, thin, huge step
+        {1e-2, 1.0, 1.0, 1.0, 200},    // moderate reference
+    };
+    for (const Extreme& x : cases) {
+        dynamics::SceneSpec s;
+        s.materials.push_back({"low", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+        s.materials.push_back({"high", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+        s.time_step = 0.005 * x.r; // s; about 1/20 of the Rayleigh step
+        s.walls.push_back({"floor", dynamics::PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
+        s.particles.push_back({0, x.r, Vec3(0, 0, x.r), Vec3::Zero(), Vec3::Zero()});
+        s.particles.push_back({1, x.r, Vec3(0, 0, 3 * x.r), Vec3::Zero(), Vec3::Zero()});
+        dynamics::System sys(s);
+        HeatSpec h = heat_for(s, heat::HeatModel::resolved, x.k_low);
+        h.materials[1].conductivity = x.k_high;
+        h.particle_temperature = {300.0, 350.0};
+        h.wall_temperature = {600.0};
+        h.ambient_temperature = 250.0;
+        h.heat_transfer_coefficient = x.biot * 3.0 * x.k_low / x.r;
+        h.step_multiple = x.multiple;
+        h.max_substeps = 1 << 20;
+        ThermalSystem heat(h, sys);
+        const double e0 = heat.thermal_energy();
+        for (int k = 0; k < 20000; ++k) {
+            sys.step();
+            heat.after_step(sys);
+        }
+        const auto [lo, hi] = heat.temperature_range();
+        const std::string label =
+            fmt::format("r {} k {}/{} Bi {} x{}", x.r, x.k_low, x.k_high, x.biot, x.multiple);
+        EXPECT_TRUE(std::isfinite(lo) && std::isfinite(hi)) << label;
+        // Bounds of the data (250 K ambient .. 600 K wall): backward Euler with positive
+        // conductances obeys the maximum principle; the lagged exchange keeps it by sub-steps.
+        EXPECT_GE(lo, 250.0 - 1e-6) << label;
+        EXPECT_LE(hi, 600.0 + 1e-6) << label;
+        EXPECT_GT(heat.counters().contacts, 0) << label;
+        std::printf("  %s: T in [%.6g, %.6g] K, lag ratio %.3g, max sub-steps %d\n", label.c_str(),
+                    lo, hi, heat.counters().max_lag_ratio, heat.counters().max_substeps);
+        // Balance: stored heat change = what came from outside, to solver tolerance.
+        EXPECT_NEAR(heat.thermal_energy() - e0, heat.external_heat(), 1e-8 * e0) << label;
+    }
+}
+
+} // namespace
+} // namespace kiln::thermal
