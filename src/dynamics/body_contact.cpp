@@ -1,0 +1,175 @@
+// Element geometry of bodies: see body_contact.hpp and docs/theory/contact.md ("Non-spherical
+// contacts").
+
+#include "dynamics/body_contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <type_traits>
+
+namespace kiln::dynamics {
+
+namespace {
+
+// Bounds of the effective radius of a contact with a convex element, as fractions of the element
+// sizes: a flat face on a flat face has R* = infinity and an edge or tip R* -> 0; both would make
+// the Hertz stiffness 4/3 E* sqrt(R* delta) useless. R* is kept in
+// [kRadiusFloor * smallest element size, largest bounding radius of the two].
+constexpr double kRadiusFloor = 0.05;
+
+/// A sphere element as a superquadric (exponents 1: the exact sphere), for the support-map methods.
+struct SphereAsSuperquadric {
+    geometry::Superquadric sq;
+    explicit SphereAsSuperquadric(double r) {
+        sq.half_axes = Vec3::Constant(r);
+        sq.e1 = 1.0;
+        sq.e2 = 1.0;
+    }
+};
+
+double clamp_radius(double r, const Element& a, const Element* b) {
+    const double lo = kRadiusFloor * std::min(a.min_size, b ? b->min_size : a.min_size);
+    const double hi = std::max(a.radius, b ? b->radius : a.radius);
+    if (!(r < hi)) { // also catches infinity
+        return hi;
+    }
+    return std::max(r, lo);
+}
+
+ElementContact sphere_sphere(const Element& a, const Element& b) {
+    ElementContact c;
+    const Vec3 d = a.centre - b.centre;
+    const double dist2 = d.squaredNorm();
+    const double rsum = a.radius + b.radius;
+    if (dist2 >= rsum * rsum || dist2 == 0.0) {
+        return c;
+    }
+    const double dist = std::sqrt(dist2);
+    c.touching = true;
+    c.overlap = rsum - dist;
+    c.normal = d / dist;
+    c.point = b.centre + (b.radius - 0.5 * c.overlap) * c.normal;
+    c.r_eff = a.radius * b.radius / rsum;
+    return c;
+}
+
+} // namespace
+
+void make_elements(const geometry::ShapeTemplate* t, const Vec3& x, const Quat& q, double r,
+                   std::vector<Element>& out) {
+    out.clear();
+    if (t == nullptr) {
+        out.push_back({Element::Kind::sphere, x, r, nullptr, Quat::Identity(), r});
+        return;
+    }
+    if (const auto* c = std::get_if<geometry::Clump>(&t->shape)) {
+        for (const geometry::ClumpSphere& s : c->spheres) {
+            out.push_back({Element::Kind::sphere, x + q * s.centre, s.radius, nullptr,
+                           Quat::Identity(), s.radius});
+        }
+        return;
+    }
+    if (const auto* s = std::get_if<geometry::Superquadric>(&t->shape)) {
+        out.push_back({Element::Kind::superquadric, x, r, s, q, s->half_axes.minCoeff()});
+        return;
+    }
+    if (const auto* s = std::get_if<geometry::Sphere>(&t->shape)) {
+        out.push_back({Element::Kind::sphere, x, s->radius, nullptr, Quat::Identity(), s->radius});
+        return;
+    }
+    // Polyhedra are refused when the scene is built (System); reaching here is a programming error.
+    out.push_back({Element::Kind::sphere, x, r, nullptr, Quat::Identity(), r});
+}
+
+ElementContact element_contact(const Element& a, const Element& b, NarrowPhase method,
+                               const Vec3* warm) {
+    // Bounding spheres first: most candidate pairs are apart.
+    const double rsum = a.radius + b.radius;
+    if ((a.centre - b.centre).squaredNorm() >= rsum * rsum) {
+        return {};
+    }
+    if (a.kind == Element::Kind::sphere && b.kind == Element::Kind::sphere) {
+        return sphere_sphere(a, b);
+    }
+    const SphereAsSuperquadric sa(a.radius);
+    const SphereAsSuperquadric sb(b.radius);
+    const geometry::PosedSuperquadric pa{a.sq ? a.sq : &sa.sq, a.centre, a.q};
+    const geometry::PosedSuperquadric pb{b.sq ? b.sq : &sb.sq, b.centre, b.q};
+    geometry::ConvexContact cc;
+    ElementContact out;
+    if (method == NarrowPhase::newton) {
+        cc = geometry::support_newton_contact(pa, pb, warm);
+        if (!cc.converged) {
+            out.fell_back = true;
+            cc = geometry::ccd_contact(pa, pb, false);
+        }
+    } else {
+        cc = geometry::ccd_contact(pa, pb, false);
+    }
+    out.converged = cc.converged;
+    if (!cc.converged || !cc.touching || cc.depth <= 0.0) {
+        return out;
+    }
+    out.touching = true;
+    out.overlap = cc.depth;
+    out.normal = cc.normal;
+    out.point = cc.point;
+    out.r_eff = clamp_radius(geometry::contact_curvature(pa, pb, cc).effective_radius, a, &b);
+    return out;
+}
+
+ElementContact element_wall_contact(const Element& a, const WallShape& w) {
+    ElementContact out;
+    if (a.kind == Element::Kind::sphere) {
+        const WallContact g =
+            std::visit([&](const auto& s) { return wall_contact(s, a.centre, a.radius); }, w);
+        if (g.overlap > 0.0) {
+            out.touching = true;
+            out.overlap = g.overlap;
+            out.normal = g.n;
+            out.point = a.centre - (a.radius - 0.5 * g.overlap) * g.n;
+            out.r_eff = g.r_eff;
+        }
+        return out;
+    }
+    // Convex element: the deepest point is the support point against the wall normal (plane), or
+    // along the outward radial direction of the centre (cylinder; exact in the limit of a wall
+    // radius much larger than the particle). The wall is flat for the effective radius.
+    const geometry::PosedSuperquadric p{a.sq, a.centre, a.q};
+    Vec3 deepest;
+    std::visit(
+        [&](const auto& s) {
+            using S = std::decay_t<decltype(s)>;
+            if constexpr (std::is_same_v<S, PlaneWall>) {
+                deepest = p.support(-s.normal);
+                out.overlap = -(deepest - s.point).dot(s.normal);
+                out.normal = s.normal;
+            } else {
+                Vec3 rho = a.centre - s.axis_point;
+                rho -= rho.dot(s.axis) * s.axis;
+                const Vec3 dir = rho.norm() > 1e-12 * a.radius ? Vec3(rho.normalized())
+                                                               : Vec3(s.axis.unitOrthogonal());
+                deepest = p.support(dir);
+                Vec3 rp = deepest - s.axis_point;
+                rp -= rp.dot(s.axis) * s.axis;
+                const double dist = rp.norm();
+                out.overlap = dist - s.radius;
+                out.normal = dist > 0.0 ? Vec3(-rp / dist) : Vec3(-dir);
+            }
+        },
+        w);
+    if (!(out.overlap > 0.0)) {
+        out.overlap = 0.0;
+        return out;
+    }
+    out.touching = true;
+    out.point = deepest + 0.5 * out.overlap * out.normal;
+    const auto k = a.sq->principal_curvatures(a.q.conjugate() * (deepest - a.centre));
+    const double gauss = k[0] * k[1];
+    const double r = gauss > 0.0 ? 1.0 / std::sqrt(gauss) : std::numeric_limits<double>::infinity();
+    out.r_eff = clamp_radius(r, a, nullptr);
+    return out;
+}
+
+} // namespace kiln::dynamics
