@@ -12,10 +12,13 @@ namespace kiln::dynamics {
 
 namespace {
 
-// Bounds of the effective radius of a contact with a convex element, as fractions of the element
-// sizes: a flat face on a flat face has R* = infinity and an edge or tip R* -> 0; both would make
-// the Hertz stiffness 4/3 E* sqrt(R* delta) useless. R* is kept in
-// [kRadiusFloor * smallest element size, largest bounding radius of the two].
+// Effective radius of a contact with a convex element. From the relative principal curvatures
+// k1 <= k2 (contact_curvature), R* = 1 / sqrt(k1 k2) (Johnson 1985, Sec. 4.2). A flat face gives
+// k = 0 and an edge k1 = 0 (R* infinite), a tip k -> infinity (R* -> 0); either would make the
+// Hertz stiffness 4/3 E* sqrt(R* delta) useless. So each curvature is raised to at least 1/L, L
+// the larger bounding radius of the two elements (a face on a face: R* = L; an edge of rounding
+// radius r on a face: R* = sqrt(L r)), and R* is kept at or above kRadiusFloor times the smaller
+// element size (a sharp tip).
 constexpr double kRadiusFloor = 0.05;
 
 /// A sphere element as a superquadric (exponents 1: the exact sphere), for the support-map methods.
@@ -28,13 +31,11 @@ struct SphereAsSuperquadric {
     }
 };
 
-double clamp_radius(double r, const Element& a, const Element* b) {
+double effective_radius(double k1, double k2, const Element& a, const Element* b) {
     const double lo = kRadiusFloor * std::min(a.min_size, b ? b->min_size : a.min_size);
-    const double hi = std::max(a.radius, b ? b->radius : a.radius);
-    if (!(r < hi)) { // also catches infinity
-        return hi;
-    }
-    return std::max(r, lo);
+    const double kmin = 1.0 / std::max(a.radius, b ? b->radius : a.radius);
+    const double r = 1.0 / std::sqrt(std::max(k1, kmin) * std::max(k2, kmin));
+    return std::isfinite(r) ? std::max(r, lo) : lo; // infinite curvature: a tip
 }
 
 ElementContact sphere_sphere(const Element& a, const Element& b) {
@@ -115,7 +116,8 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
     out.overlap = cc.depth;
     out.normal = cc.normal;
     out.point = cc.point;
-    out.r_eff = clamp_radius(geometry::contact_curvature(pa, pb, cc).effective_radius, a, &b);
+    const geometry::ContactCurvature k = geometry::contact_curvature(pa, pb, cc);
+    out.r_eff = effective_radius(k.k_min, k.k_max, a, &b);
     return out;
 }
 
@@ -166,9 +168,7 @@ ElementContact element_wall_contact(const Element& a, const WallShape& w) {
     out.touching = true;
     out.point = deepest + 0.5 * out.overlap * out.normal;
     const auto k = a.sq->principal_curvatures(a.q.conjugate() * (deepest - a.centre));
-    const double gauss = k[0] * k[1];
-    const double r = gauss > 0.0 ? 1.0 / std::sqrt(gauss) : std::numeric_limits<double>::infinity();
-    out.r_eff = clamp_radius(r, a, nullptr);
+    out.r_eff = effective_radius(k[0], k[1], a, nullptr);
     return out;
 }
 
