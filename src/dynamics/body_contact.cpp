@@ -38,6 +38,13 @@ double effective_radius(double k1, double k2, const Element& a, const Element* b
     return std::isfinite(r) ? std::max(r, lo) : lo; // infinite curvature: a tip
 }
 
+/// Overlap of a and b along the unit normal n (from b to a), from the analytic supports: the
+/// distance between b's farthest point along n and a's farthest point along -n (m).
+double depth_along(const geometry::PosedSuperquadric& a, const geometry::PosedSuperquadric& b,
+                   const Vec3& n) {
+    return n.dot(b.support(n)) - n.dot(a.support(-n));
+}
+
 ElementContact sphere_sphere(const Element& a, const Element& b) {
     ElementContact c;
     const Vec3 d = a.centre - b.centre;
@@ -102,8 +109,26 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
     if (method == NarrowPhase::newton) {
         cc = geometry::support_newton_contact(pa, pb, warm);
         if (!cc.converged) {
+            // Newton stalled (near flat faces the support map is ill-conditioned and its gradient
+            // test may not be met). Its last direction and GJK/EPA's normal both give an exact
+            // upper bound of the MTD when f is evaluated there with the analytic supports; the
+            // smaller one is kept. Using EPA's own depth instead would switch between two depth
+            // definitions and leave an energy error that does not shrink with dt (validation 14).
             out.fell_back = true;
-            cc = geometry::ccd_contact(pa, pb, false);
+            const geometry::ConvexContact epa = geometry::ccd_contact(pa, pb, false);
+            // Any direction overestimates the MTD, so a stalled direction could invent a contact:
+            // EPA decides whether the bodies touch, and a failure of both is counted and skipped.
+            if (!epa.converged || !epa.touching) {
+                cc = epa;
+            } else {
+                const double f_newton = depth_along(pa, pb, cc.normal);
+                const double f_epa = depth_along(pa, pb, epa.normal);
+                cc.converged = true;
+                cc.depth = std::min(f_newton, f_epa);
+                cc.normal = f_epa < f_newton ? epa.normal : cc.normal;
+            }
+            cc.touching = cc.converged && cc.depth > 0.0;
+            cc.point = 0.5 * (pa.support(-cc.normal) + pb.support(cc.normal));
         }
     } else {
         cc = geometry::ccd_contact(pa, pb, false);
