@@ -38,6 +38,13 @@ double effective_radius(double k1, double k2, const Element& a, const Element* b
     return std::isfinite(r) ? std::max(r, lo) : lo; // infinite curvature: a tip
 }
 
+/// Exponent below which a superquadric counts as blocky for the separation gate (-).
+constexpr double kBlocky = 0.5;
+
+bool blocky(const Element& e) {
+    return e.sq != nullptr && std::min(e.sq->e1, e.sq->e2) < kBlocky;
+}
+
 /// Overlap of a and b along the unit normal n (from b to a), from the analytic supports: the
 /// distance between b's farthest point along n and a's farthest point along -n (m).
 double depth_along(const geometry::PosedSuperquadric& a, const geometry::PosedSuperquadric& b,
@@ -64,9 +71,8 @@ ElementContact sphere_sphere(const Element& a, const Element& b) {
 
 } // namespace
 
-void make_elements(const geometry::ShapeTemplate* t, const Vec3& x, const Quat& q, double r,
-                   std::vector<Element>& out) {
-    out.clear();
+void append_elements(const geometry::ShapeTemplate* t, const Vec3& x, const Quat& q, double r,
+                     std::vector<Element>& out) {
     if (t == nullptr) {
         out.push_back({Element::Kind::sphere, x, r, nullptr, Quat::Identity(), r});
         return;
@@ -104,9 +110,29 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
     const SphereAsSuperquadric sb(b.radius);
     const geometry::PosedSuperquadric pa{a.sq ? a.sq : &sa.sq, a.centre, a.q};
     const geometry::PosedSuperquadric pb{b.sq ? b.sq : &sb.sq, b.centre, b.q};
+    // Separating-axis shortcut: the overlap along any direction bounds the MTD from above, so a
+    // gap along the line of centres or along the last normal proves the bodies apart (two
+    // support evaluations instead of a narrow-phase search).
+    const Vec3 line = a.centre - b.centre;
+    if (line.squaredNorm() > 0.0 && depth_along(pa, pb, line.normalized()) < 0.0) {
+        return {};
+    }
+    if (warm != nullptr && depth_along(pa, pb, *warm) < 0.0) {
+        return {};
+    }
     geometry::ConvexContact cc;
     ElementContact out;
     if (method == NarrowPhase::newton) {
+        // Near misses (bounding spheres overlap, bodies apart) make Newton search for the largest
+        // gap, which is slow for blocky shapes (exponent below kBlocky: 3x faster whole scene at
+        // e = 0.3, bench_bodies); MPR proves separation cheaply there. Smooth shapes converge
+        // faster in Newton than MPR takes (2.5x slower whole scene at e = 0.8 with the gate).
+        if (blocky(a) || blocky(b)) {
+            const geometry::ConvexContact mpr = geometry::ccd_contact(pa, pb, true);
+            if (mpr.converged && !mpr.touching) {
+                return out;
+            }
+        }
         cc = geometry::support_newton_contact(pa, pb, warm);
         if (!cc.converged) {
             // Newton stalled (near flat faces the support map is ill-conditioned and its gradient

@@ -71,9 +71,10 @@ struct NarrowPhaseCounters {
     long failures = 0;  ///< no method converged: the contact was skipped for that step
 };
 
-/// Elements of particle data (centre x, orientation q, radius r) of template t (nullptr: sphere).
-void make_elements(const geometry::ShapeTemplate* t, const Vec3& x, const Quat& q, double r,
-                   std::vector<Element>& out);
+/// Appends the elements of a particle (centre x, orientation q, radius r) of template t (nullptr:
+/// a sphere) to `out`.
+void append_elements(const geometry::ShapeTemplate* t, const Vec3& x, const Quat& q, double r,
+                     std::vector<Element>& out);
 
 /// Contact of two elements; `warm` is the previous normal (b to a) or nullptr.
 [[nodiscard]] ElementContact element_contact(const Element& a, const Element& b, NarrowPhase method,

@@ -176,7 +176,8 @@ class System {
     std::vector<std::uint32_t> body_entries_; // list entries with a body on either side
     std::map<BodyContactKey, BodyContact> body_contacts_;
     NarrowPhaseCounters np_;
-    std::vector<Element> elems_a_, elems_b_;
+    std::vector<Element> elements_;            // elements of every particle, this step
+    std::vector<std::uint32_t> element_begin_; // particle i: [begin[i], begin[i + 1])
 };
 
 } // namespace kiln::dynamics

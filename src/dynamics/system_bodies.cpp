@@ -40,6 +40,15 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
         return p_.shape[i] >= 0 ? &spec_.shapes[static_cast<std::size_t>(p_.shape[i])] : nullptr;
     };
     const auto is_convex = [](const Element& e) { return e.kind != Element::Kind::sphere; };
+    // Elements of every particle, posed once per step.
+    elements_.clear();
+    element_begin_.assign(p_.size() + 1, 0);
+    for (std::size_t i = 0; i < p_.size(); ++i) {
+        element_begin_[i] = static_cast<std::uint32_t>(elements_.size());
+        append_elements(tmpl(static_cast<std::uint32_t>(i)), p_.x[i], p_.q[i], p_.radius[i],
+                        elements_);
+    }
+    element_begin_[p_.size()] = static_cast<std::uint32_t>(elements_.size());
 
     std::visit(
         [&](const auto& law) {
@@ -90,27 +99,31 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 if (p_.id[a] > p_.id[b]) {
                     std::swap(a, b);
                 }
-                make_elements(tmpl(a), p_.x[a], p_.q[a], p_.radius[a], elems_a_);
-                make_elements(tmpl(b), p_.x[b], p_.q[b], p_.radius[b], elems_b_);
-                for (std::size_t ea = 0; ea < elems_a_.size(); ++ea) {
-                    const Element& A = elems_a_[ea];
+                const std::uint32_t a0 = element_begin_[a];
+                const std::uint32_t b0 = element_begin_[b];
+                for (std::uint32_t ea = a0; ea < element_begin_[a + 1]; ++ea) {
+                    const Element& A = elements_[ea];
                     const double rab = A.radius + p_.radius[b];
                     if ((A.centre - p_.x[b]).squaredNorm() >= rab * rab) {
                         continue;
                     }
-                    for (std::size_t eb = 0; eb < elems_b_.size(); ++eb) {
-                        const Element& B = elems_b_[eb];
-                        const BodyContactKey key{p_.id[a], p_.id[b], static_cast<std::int32_t>(ea),
-                                                 static_cast<std::int32_t>(eb)};
+                    for (std::uint32_t eb = b0; eb < element_begin_[b + 1]; ++eb) {
+                        const Element& B = elements_[eb];
+                        const double re = A.radius + B.radius;
+                        if ((A.centre - B.centre).squaredNorm() >= re * re) {
+                            continue; // bounding spheres apart: no contact, no history
+                        }
+                        const BodyContactKey key{p_.id[a], p_.id[b],
+                                                 static_cast<std::int32_t>(ea - a0),
+                                                 static_cast<std::int32_t>(eb - b0)};
                         const auto it = body_contacts_.find(key);
                         const BodyContact* old = it == body_contacts_.end() ? nullptr : &it->second;
-                        const bool convex = is_convex(A) || is_convex(B);
                         // Warm start: the last normal, else the line of centres (a new contact).
                         const Vec3 guess = old ? old->normal : Vec3(A.centre - B.centre);
                         const bool usable = guess.squaredNorm() > 0.0;
                         const Vec3 warm = usable ? Vec3(guess.normalized()) : Vec3::UnitZ();
                         const ElementContact ec = element_contact(A, B, spec_.narrow_phase, &warm);
-                        if (convex && (A.centre - B.centre).norm() < A.radius + B.radius) {
+                        if (is_convex(A) || is_convex(B)) {
                             ++np_.calls;
                             np_.fallbacks += ec.fell_back ? 1 : 0;
                             np_.failures += ec.converged ? 0 : 1;
@@ -125,7 +138,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
 
             // Walls, body by body and wall by wall.
             for (const std::uint32_t a : bodies_) {
-                bool built = false;
                 for (std::size_t w = 0; w < spec_.walls.size(); ++w) {
                     const WallShape& ws = spec_.walls[w].shape;
                     const WallContact bound = std::visit(
@@ -133,21 +145,18 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     if (!(bound.overlap > 0.0)) {
                         continue;
                     }
-                    if (!built) {
-                        make_elements(tmpl(a), p_.x[a], p_.q[a], p_.radius[a], elems_a_);
-                        built = true;
-                    }
-                    for (std::size_t ea = 0; ea < elems_a_.size(); ++ea) {
-                        const ElementContact ec = element_wall_contact(elems_a_[ea], ws);
+                    const std::uint32_t a0 = element_begin_[a];
+                    for (std::uint32_t ea = a0; ea < element_begin_[a + 1]; ++ea) {
+                        const ElementContact ec = element_wall_contact(elements_[ea], ws);
                         if (!ec.touching) {
                             continue;
                         }
                         const BodyContactKey key{p_.id[a], -1 - static_cast<std::int64_t>(w),
-                                                 static_cast<std::int32_t>(ea), 0};
+                                                 static_cast<std::int32_t>(ea - a0), 0};
                         const auto it = body_contacts_.find(key);
                         apply(a, -1, key, ec, it == body_contacts_.end() ? nullptr : &it->second,
                               spec_.walls[w].material,
-                              ec.overlap / ratio_size(elems_a_[ea], nullptr), wall_totals);
+                              ec.overlap / ratio_size(elements_[ea], nullptr), wall_totals);
                     }
                 }
             }
