@@ -12,6 +12,7 @@
 #include "kiln/version.hpp"
 #include "thermal/thermal_system.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -234,6 +235,12 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
             ? static_cast<double>(summary.steps) * static_cast<double>(summary.particles) / wall
             : 0.0;
     summary.neighbour_builds = sys->neighbour_builds();
+    summary.bodies = static_cast<long>(std::count_if(sys->particles().shape.begin(),
+                                                     sys->particles().shape.end(),
+                                                     [](std::int32_t k) { return k >= 0; }));
+    summary.narrow_phase_calls = sys->narrow_phase_counters().calls;
+    summary.narrow_phase_fallbacks = sys->narrow_phase_counters().fallbacks;
+    summary.narrow_phase_failures = sys->narrow_phase_counters().failures;
     for (const auto& name : spec.output.monitors) {
         summary.final_monitors.emplace_back(name, io::monitor_value(*sys, heat.get(), name));
     }

@@ -9,7 +9,10 @@
 
 namespace kiln {
 
-/// Per-particle state of spherical particles. Vectors are in the world frame, SI units.
+/// Per-particle state. Vectors are in the world frame, SI units. Spheres use the first block of
+/// fields only; non-spherical bodies (shape >= 0) also carry an orientation and world angular
+/// momentum, `radius` is then the bounding radius about the centre of mass and `omega` is derived
+/// from (q, ang_mom) after every update.
 struct ParticleStore {
     std::vector<std::int64_t> id;       ///< stable particle identity (never reused)
     std::vector<std::int32_t> material; ///< index into the material table
@@ -23,6 +26,10 @@ struct ParticleStore {
     std::vector<Vec3> omega;  ///< angular velocity (rad/s, world)
     std::vector<Vec3> force;  ///< total force of the current step (N, world)
     std::vector<Vec3> torque; ///< total torque about the centre (N m, world)
+    std::vector<std::int32_t> shape; ///< shape template index of a body, -1 for a sphere
+    std::vector<Quat> q;             ///< orientation, body -> world (identity for spheres)
+    std::vector<Vec3> ang_mom;       ///< angular momentum (kg m^2/s, world); bodies only
+    std::vector<Vec3> inertia;       ///< principal moments (kg m^2, body frame); bodies only
 
     /// Number of particles.
     [[nodiscard]] std::size_t size() const { return x.size(); }
@@ -30,6 +37,13 @@ struct ParticleStore {
     /// Appends a solid sphere of density `density` (kg/m^3); returns its index.
     std::size_t add_sphere(std::int64_t pid, std::int32_t mat, double r, double density,
                            const Vec3& pos, const Vec3& vel, const Vec3& ang_vel);
+
+    /// Appends a rigid body of template `shape_index` with bounding radius r (m), mass (kg),
+    /// principal inertia (kg m^2, body frame), orientation q0 (body -> world) and world angular
+    /// velocity; returns its index.
+    std::size_t add_body(std::int64_t pid, std::int32_t mat, std::int32_t shape_index, double r,
+                         double m, const Vec3& principal_inertia, const Vec3& pos, const Vec3& vel,
+                         const Quat& q0, const Vec3& ang_vel);
 
     /// Reorders every field so that new index k holds old index order[k].
     void permute(const std::vector<std::uint32_t>& order);

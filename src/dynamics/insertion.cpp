@@ -100,6 +100,16 @@ class PlacementGrid {
 
 } // namespace
 
+void System::place(const InsertSpec& ins, double radius, const Vec3& x) {
+    if (ins.shape >= 0) {
+        // A body's insertion radius is its bounding radius (the reader sets a constant size).
+        add_body(ins.material, ins.shape, x, ins.velocity, ins.omega,
+                 initial_orientation(ins.orientation));
+    } else {
+        add_particle(ins.material, radius, x, ins.velocity, ins.omega);
+    }
+}
+
 void System::insert(const InsertSpec& ins) {
     const double rmax = ins.size.largest();
     const Aabb& reg = ins.region;
@@ -128,7 +138,7 @@ void System::insert(const InsertSpec& ins) {
                     const Vec3 c = reg.lo + Vec3::Constant(rmax) +
                                    a * Vec3(static_cast<double>(x), static_cast<double>(y),
                                             static_cast<double>(z));
-                    add_particle(ins.material, ins.size.sample(rng_), c, ins.velocity, ins.omega);
+                    place(ins, ins.size.sample(rng_), c);
                     ++placed;
                 }
             }
@@ -174,7 +184,7 @@ void System::insert(const InsertSpec& ins) {
             continue;
         }
         grid.add(c, r);
-        add_particle(ins.material, r, c, ins.velocity, ins.omega);
+        place(ins, r, c);
         ++placed;
     }
     if (placed < ins.count) {

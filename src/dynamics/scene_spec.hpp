@@ -6,6 +6,7 @@
 #include "core/material.hpp"
 #include "core/types.hpp"
 #include "dynamics/wall.hpp"
+#include "geometry/shape.hpp"
 
 #include <cstdint>
 #include <random>
@@ -31,6 +32,18 @@ struct SizeDistribution {
     double sample(std::mt19937_64& rng) const;
 };
 
+/// Initial orientation of non-spherical particles.
+struct OrientationSpec {
+    bool random = false;           ///< uniformly random orientation (from the scene's stream)
+    Quat fixed = Quat::Identity(); ///< used when not random: body -> world
+};
+
+/// Narrow-phase method for pairs involving a superquadric (geometry/convex_contact.hpp).
+enum class NarrowPhase {
+    newton, ///< Newton on the sphere of directions, warm-started from the last normal (default)
+    gjk_epa ///< libccd GJK + EPA
+};
+
 /// Particles inserted at start-up in a box region.
 struct InsertSpec {
     enum class Kind { lattice, random };
@@ -42,15 +55,25 @@ struct InsertSpec {
     double spacing = 0;           ///< lattice spacing (m), 0 = 2 r_max
     Vec3 velocity = Vec3::Zero(); ///< initial velocity (m/s, world)
     Vec3 omega = Vec3::Zero();    ///< initial angular velocity (rad/s, world)
+    int shape = -1;               ///< index into SceneSpec::shapes; -1 = spheres of `size`
+    OrientationSpec orientation;  ///< initial orientation of bodies
 };
 
 /// One explicitly placed particle.
 struct ParticleSpec {
-    int material = 0;          ///< material index
-    double radius = 0;         ///< radius (m)
-    Vec3 x = Vec3::Zero();     ///< centre (m, world)
-    Vec3 v = Vec3::Zero();     ///< velocity (m/s, world)
-    Vec3 omega = Vec3::Zero(); ///< angular velocity (rad/s, world)
+    ParticleSpec() = default;
+    /// A sphere: material index, radius (m), centre (m), velocity (m/s), angular velocity
+    /// (rad/s), all world frame.
+    ParticleSpec(int mat, double r, const Vec3& pos, const Vec3& vel, const Vec3& ang_vel)
+        : material(mat), radius(r), x(pos), v(vel), omega(ang_vel) {}
+
+    int material = 0;            ///< material index
+    double radius = 0;           ///< radius (m)
+    Vec3 x = Vec3::Zero();       ///< centre (m, world)
+    Vec3 v = Vec3::Zero();       ///< velocity (m/s, world)
+    Vec3 omega = Vec3::Zero();   ///< angular velocity (rad/s, world)
+    int shape = -1;              ///< index into SceneSpec::shapes; -1 = a sphere of `radius`
+    OrientationSpec orientation; ///< initial orientation of a body
 };
 
 /// The mechanical scene.
@@ -71,6 +94,8 @@ struct SceneSpec {
         0.1; ///< warn when dt > this fraction of min(Rayleigh, contact time)
     bool allow_unsafe_time_step = false; ///< turn the "dt above critical" error into a warning
     double expected_speed = 0; ///< largest impact speed for the Hertz estimate (m/s), 0 = estimate
+    std::vector<geometry::ShapeTemplate> shapes;    ///< templates of the non-spherical particles
+    NarrowPhase narrow_phase = NarrowPhase::newton; ///< method for superquadric pairs
 };
 
 } // namespace kiln::dynamics

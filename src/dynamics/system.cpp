@@ -3,6 +3,7 @@
 #include "contact/contact_law.hpp"
 #include "core/error.hpp"
 #include "dynamics/time_step.hpp"
+#include "geometry/rotation.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -47,7 +48,12 @@ System::System(const SceneSpec& spec)
     }
     nl_.set_threads(threads_);
     for (const auto& ps : spec_.particles) {
-        add_particle(ps.material, ps.radius, ps.x, ps.v, ps.omega);
+        if (ps.shape >= 0) {
+            add_body(ps.material, ps.shape, ps.x, ps.v, ps.omega,
+                     initial_orientation(ps.orientation));
+        } else {
+            add_particle(ps.material, ps.radius, ps.x, ps.v, ps.omega);
+        }
     }
     for (const auto& ins : spec_.inserts) {
         insert(ins);
@@ -65,6 +71,38 @@ std::size_t System::add_particle(int material, double radius, const Vec3& x, con
     return i;
 }
 
+std::size_t System::add_body(int material, int shape, const Vec3& x, const Vec3& v,
+                             const Vec3& omega, const Quat& q) {
+    const geometry::ShapeTemplate& t = spec_.shapes.at(static_cast<std::size_t>(shape));
+    if (std::holds_alternative<geometry::ConvexPolyhedron>(t.shape)) {
+        throw InputError("", 0, "shape",
+                         fmt::format("\"{}\" is a polyhedron; polyhedron particles are not yet "
+                                     "supported by kiln run (clumps and superquadrics are)",
+                                     t.name));
+    }
+    const double rho = spec_.materials.at(static_cast<std::size_t>(material)).density;
+    const std::size_t i = p_.add_body(next_id_++, material, shape, t.bounding_radius(), t.mass(rho),
+                                      t.inertia(rho), x, v, q, omega);
+    wall_shear_.resize(p_.size() * spec_.walls.size(), Vec3::Zero());
+    has_bodies_ = true;
+    list_valid_ = false;
+    return i;
+}
+
+Quat System::initial_orientation(const OrientationSpec& o) {
+    if (!o.random) {
+        return o.fixed.normalized();
+    }
+    // Uniform on SO(3): a normalised 4D Gaussian vector (Muller 1959, uniform on S^3).
+    std::normal_distribution<double> g(0.0, 1.0);
+    Quat q;
+    q.w() = g(rng_);
+    q.x() = g(rng_);
+    q.y() = g(rng_);
+    q.z() = g(rng_);
+    return q.normalized();
+}
+
 void System::check_time_step() {
     if (p_.size() == 0) {
         return;
@@ -76,7 +114,19 @@ void System::check_time_step() {
     double vmax = 0.0;
     for (std::size_t i = 0; i < p_.size(); ++i) {
         auto& r = rmin[static_cast<std::size_t>(p_.material[i])];
-        r = std::min(r, p_.radius[i]);
+        double size = p_.radius[i];
+        if (p_.shape[i] >= 0) {
+            // A body's contacts are as stiff as those of its smallest element.
+            const auto& shape = spec_.shapes[static_cast<std::size_t>(p_.shape[i])].shape;
+            if (const auto* c = std::get_if<geometry::Clump>(&shape)) {
+                for (const auto& sph : c->spheres) {
+                    size = std::min(size, sph.radius);
+                }
+            } else if (const auto* sq = std::get_if<geometry::Superquadric>(&shape)) {
+                size = sq->half_axes.minCoeff();
+            }
+        }
+        r = std::min(r, size);
         lo = lo.cwiseMin(p_.x[i]);
         hi = hi.cwiseMax(p_.x[i]);
         vmax = std::max(vmax, p_.v[i].norm() + p_.omega[i].norm() * p_.radius[i]);
@@ -154,6 +204,28 @@ void System::rebuild_neighbours() {
     list_valid_ = true;
 }
 
+void System::index_bodies() {
+    bodies_.clear();
+    body_entries_.clear();
+    has_bodies_ = false;
+    for (std::size_t i = 0; i < p_.size(); ++i) {
+        if (p_.shape[i] >= 0) {
+            bodies_.push_back(static_cast<std::uint32_t>(i));
+            has_bodies_ = true;
+        }
+    }
+    if (!has_bodies_) {
+        return;
+    }
+    const auto& nb = nl_.partners();
+    const auto& owner = nl_.owners();
+    for (std::size_t k = 0; k < nb.size(); ++k) {
+        if (p_.shape[owner[k]] >= 0 || p_.shape[nb[k]] >= 0) {
+            body_entries_.push_back(static_cast<std::uint32_t>(k));
+        }
+    }
+}
+
 void System::index_partners() {
     // For each particle, the list entries where it is the partner, in increasing entry order.
     const auto& nb = nl_.partners();
@@ -169,6 +241,7 @@ void System::index_partners() {
     for (std::size_t k = 0; k < nb.size(); ++k) {
         as_partner_[fill[nb[k]]++] = static_cast<std::uint32_t>(k);
     }
+    index_bodies();
 }
 
 void System::find_wall_candidates() {
@@ -179,6 +252,9 @@ void System::find_wall_candidates() {
     wall_candidates_.assign(nw, {});
     for (std::size_t w = 0; w < nw; ++w) {
         for (std::size_t i = 0; i < p_.size(); ++i) {
+            if (p_.shape[i] >= 0) {
+                continue; // bodies meet walls in body_forces()
+            }
             const WallContact wc = std::visit(
                 [&](const auto& shape) { return wall_contact(shape, p_.x[i], p_.radius[i]); },
                 spec_.walls[w].shape);
@@ -214,7 +290,7 @@ inline void keep_or_clear(Vec3& v, bool keep) {
 
 // Work units have a fixed size, so the contacts of a unit, the blocks they are evaluated in and the
 // order of every sum do not depend on the number of threads.
-template <class Law, bool direct>
+template <class Law, bool direct, bool bodies>
 void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, ChunkTotals& t) {
     // Local pointers, as the compiler would otherwise reload each array's address per contact.
     const std::uint32_t* __restrict nb = nl_.partners().data();
@@ -225,6 +301,7 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
     const Vec3* __restrict omega = p_.omega.data();
     const double* __restrict radius = p_.radius.data();
     const double* __restrict mass = p_.mass.data();
+    const std::int32_t* __restrict shape = p_.shape.data();
     Vec3* __restrict force = p_.force.data();
     Vec3* __restrict torque = p_.torque.data();
     const double dt = spec_.time_step;
@@ -238,7 +315,11 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
         const std::uint32_t i = owner[k];
         const std::uint32_t j = nb[k];
         const double rsum = radius[i] + radius[j];
-        const bool touch = (x[i] - x[j]).squaredNorm() < rsum * rsum;
+        bool touch = (x[i] - x[j]).squaredNorm() < rsum * rsum;
+        if constexpr (bodies) {
+            // Both -1 (spheres) keeps the sign bit; a body (index >= 0) on either side clears it.
+            touch = touch && (shape[i] & shape[j]) < 0;
+        }
         active[n_active] = static_cast<std::uint32_t>(k);
         if constexpr (!direct) {
             // Rows of a chunk are its touching entries in order, from the chunk's first row.
@@ -469,7 +550,9 @@ void System::half_kick(std::size_t p0, std::size_t p1) {
     }
 }
 
-void System::compute_forces(bool kick) {
+void System::compute_forces(bool kick_requested) {
+    // With bodies, their contacts are added after the sphere loop (body_forces), so the kick waits.
+    const bool kick = kick_requested && !has_bodies_;
     const std::size_t n = p_.size();
     const std::size_t entries = nl_.partners().size();
     const bool direct = threads_ == 1;
@@ -495,10 +578,16 @@ void System::compute_forces(bool kick) {
                 for (std::size_t u = 0; u < pair_units; ++u) {
                     const std::size_t begin = u * pair_chunk_size;
                     const std::size_t end = std::min(entries, begin + pair_chunk_size);
-                    if (direct) {
-                        pair_chunk<Law, true>(law, begin, end, pair_totals_[u]);
+                    if (has_bodies_) {
+                        if (direct) {
+                            pair_chunk<Law, true, true>(law, begin, end, pair_totals_[u]);
+                        } else {
+                            pair_chunk<Law, false, true>(law, begin, end, pair_totals_[u]);
+                        }
+                    } else if (direct) {
+                        pair_chunk<Law, true, false>(law, begin, end, pair_totals_[u]);
                     } else {
-                        pair_chunk<Law, false>(law, begin, end, pair_totals_[u]);
+                        pair_chunk<Law, false, false>(law, begin, end, pair_totals_[u]);
                     }
                 }
             // Per particle: pair results summed (several threads), walls, half kick.
@@ -520,6 +609,21 @@ void System::compute_forces(bool kick) {
         },
         spec_.contact.law);
 
+    // Bodies: element contacts in a fixed serial order, then the kick of every particle.
+    ChunkTotals body_pairs;
+    ChunkTotals body_walls;
+    if (has_bodies_) {
+        body_forces(body_pairs, body_walls);
+        if (kick_requested) {
+#pragma omp parallel for num_threads(threads_) schedule(static)
+            for (std::size_t u = 0; u < particle_units; ++u) {
+                const std::size_t p0 = u * particle_unit_size;
+                half_kick(p0, std::min(n, p0 + particle_unit_size));
+            }
+            rotate_bodies(false);
+        }
+    }
+
     // Sums in a fixed order, whatever the number of threads.
     counters_ = ContactCounters{};
     for (const ChunkTotals& t : pair_totals_) {
@@ -532,6 +636,11 @@ void System::compute_forces(bool kick) {
         counters_.elastic_energy += t.energy;
         counters_.max_overlap_ratio = std::max(counters_.max_overlap_ratio, t.max_ratio);
     }
+    counters_.particle_contacts += body_pairs.contacts;
+    counters_.wall_contacts += body_walls.contacts;
+    counters_.elastic_energy += body_pairs.energy + body_walls.energy;
+    counters_.max_overlap_ratio =
+        std::max({counters_.max_overlap_ratio, body_pairs.max_ratio, body_walls.max_ratio});
 }
 
 void System::step() {
@@ -555,6 +664,9 @@ void System::step() {
             p_.x[i] += dt * p_.v[i];
             moved |= same_size && (p_.x[i] - x_build[i]).squaredNorm() > lim2 ? 1 : 0;
         }
+    }
+    if (has_bodies_) {
+        rotate_bodies(true);
     }
     if (moved != 0) {
         rebuild_neighbours();
@@ -625,7 +737,9 @@ Energies System::energies() const {
     Energies e;
     for (std::size_t i = 0; i < p_.size(); ++i) {
         e.kinetic += 0.5 * p_.mass[i] * p_.v[i].squaredNorm();
-        e.rotational += 0.5 * p_.omega[i].squaredNorm() / p_.inv_inertia[i];
+        e.rotational += p_.shape[i] >= 0
+                            ? geometry::rotational_energy(p_.q[i], p_.ang_mom[i], p_.inertia[i])
+                            : 0.5 * p_.omega[i].squaredNorm() / p_.inv_inertia[i];
         e.potential -= p_.mass[i] * spec_.gravity.dot(p_.x[i]);
     }
     e.elastic = counters_.elastic_energy;
@@ -649,6 +763,8 @@ SystemState System::save_state() const {
     std::ostringstream os;
     os << rng_;
     s.rng = os.str();
+    s.body_contacts.assign(body_contacts_.begin(), body_contacts_.end());
+    s.narrow_phase = np_;
     return s;
 }
 
@@ -663,6 +779,9 @@ void System::restore_state(SystemState s) {
     std::istringstream is(s.rng);
     is >> rng_;
     counters_ = s.counters;
+    body_contacts_ =
+        std::map<BodyContactKey, BodyContact>(s.body_contacts.begin(), s.body_contacts.end());
+    np_ = s.narrow_phase;
     // The list is restored as it was; rebuilding it now would reorder particles and change the
     // summation order. Forces and torques of the last step are part of the store; recomputing them
     // would advance the tangential histories a second time. Either would break exact continuation.

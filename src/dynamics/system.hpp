@@ -4,8 +4,10 @@
 #include "contact/contact_law.hpp"
 #include "contact/neighbour_list.hpp"
 #include "core/particle_store.hpp"
+#include "dynamics/body_contact.hpp"
 #include "dynamics/scene_spec.hpp"
 
+#include <map>
 #include <random>
 #include <string>
 #include <vector>
@@ -62,6 +64,8 @@ struct SystemState {
     std::int64_t next_id = 0;
     ContactCounters counters;
     std::string rng; ///< textual state of the random stream (std::mt19937_64 operator<<)
+    std::vector<std::pair<BodyContactKey, BodyContact>> body_contacts; ///< body element contacts
+    NarrowPhaseCounters narrow_phase;                                  ///< counters so far
 };
 
 /// Particles, walls and contacts with a velocity-Verlet integrator.
@@ -116,6 +120,20 @@ class System {
     /// Adds one particle; returns its index. The neighbour list is rebuilt at the next step.
     std::size_t add_particle(int material, double radius, const Vec3& x, const Vec3& v,
                              const Vec3& omega);
+    /// Adds one rigid body of template `shape` (index into SceneSpec::shapes) at centre of mass x
+    /// (m, world), velocity v (m/s, world), angular velocity omega (rad/s, world) and orientation
+    /// q (body -> world); returns its index. Throws InputError for a polyhedron template.
+    std::size_t add_body(int material, int shape, const Vec3& x, const Vec3& v, const Vec3& omega,
+                         const Quat& q);
+    /// True when the scene holds non-spherical particles.
+    [[nodiscard]] bool has_bodies() const { return has_bodies_; }
+    /// Element contacts involving a body from the last force evaluation (world frame: points,
+    /// normals from b to a, overlaps, effective radii, forces on a), by key (ids, elements).
+    [[nodiscard]] const std::map<BodyContactKey, BodyContact>& body_contacts() const {
+        return body_contacts_;
+    }
+    /// Narrow-phase counters summed over the run (superquadric queries, fallbacks, failures).
+    [[nodiscard]] const NarrowPhaseCounters& narrow_phase_counters() const { return np_; }
 
   private:
     /// Sums of one work unit (a chunk of list entries or wall candidates).
@@ -126,9 +144,14 @@ class System {
     };
 
     void insert(const InsertSpec& ins);
+    void place(const InsertSpec& ins, double radius, const Vec3& x);
+    Quat initial_orientation(const OrientationSpec& o);
+    void body_forces(ChunkTotals& pairs, ChunkTotals& walls);
+    void rotate_bodies(bool drift);
+    void index_bodies();
     void check_time_step();
-    void compute_forces(bool half_kick = false);
-    template <class Law, bool direct>
+    void compute_forces(bool kick_requested = false);
+    template <class Law, bool direct, bool bodies>
     void pair_chunk(const Law& law, std::size_t begin, std::size_t end, ChunkTotals& t);
     void sum_pair_results(std::size_t i);
     template <class Law>
@@ -162,6 +185,15 @@ class System {
     long step_ = 0;
     std::int64_t next_id_ = 0;
     bool list_valid_ = false;
+    // Non-spherical particles (see docs/architecture.md, "Bodies in the run loop"): their pairs are
+    // left out of the sphere kernel and evaluated element by element in body_forces().
+    bool has_bodies_ = false;
+    std::vector<std::uint32_t> bodies_;       // indices of the body particles
+    std::vector<std::uint32_t> body_entries_; // list entries with a body on either side
+    std::map<BodyContactKey, BodyContact> body_contacts_;
+    NarrowPhaseCounters np_;
+    std::vector<Element> elements_;            // elements of every particle, this step
+    std::vector<std::uint32_t> element_begin_; // particle i: [begin[i], begin[i + 1])
 };
 
 } // namespace kiln::dynamics

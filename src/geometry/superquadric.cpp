@@ -121,6 +121,11 @@ Vec3 Superquadric::support(const Vec3& d) const {
     //   r = (c dz)^(1/(n2-1)), t = s P^(-(n2/n1-1)/(n2-1)), P = p^n1 + q^n1,
     //   s = (P^(n2 (n1-1) / (n1 (n2-1))) + r^n2)^(-1/n2).
     KILN_ASSERT(d.squaredNorm() > 0.0);
+    if (e1 == 1.0 && e2 == 1.0) {
+        // Ellipsoid (and sphere): A^2 d / |A d| with A = diag(a, b, c), no powers needed.
+        const Vec3 ad = half_axes.cwiseProduct(d);
+        return half_axes.cwiseProduct(ad) / ad.norm();
+    }
     const double scale = half_axes.maxCoeff();
     const Vec3 h = half_axes / scale;
     const Vec3 dn = d.cwiseAbs() / d.cwiseAbs().maxCoeff();

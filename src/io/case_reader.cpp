@@ -1,10 +1,12 @@
 #include "io/case_reader.hpp"
+#include "io/shape_reader.hpp"
 #include "io/toml_text.hpp"
 
 #include "core/error.hpp"
 #include "heat/resolved_model.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <fmt/format.h>
 #include <fstream>
 #include <limits>
@@ -506,7 +508,111 @@ void read_walls(Section& root, CaseSpec& c, const std::map<std::string, int>& ma
     });
 }
 
-void read_inserts(Section& root, CaseSpec& c, const std::map<std::string, int>& mats) {
+/// Shape templates of a case, loaded once per name.
+struct ShapeTable {
+    std::vector<std::filesystem::path> dirs; ///< folders searched for NAME.toml, in order
+    std::map<std::string, int> index;        ///< name -> index in SceneSpec::shapes
+};
+
+/// Folders searched for shape templates: the case file's folder and its shapes/ subfolder, then
+/// $KILN_SHAPES, ./shapes and the source tree's shapes/ (io::default_shape_dirs).
+ShapeTable shape_table_for(const std::string& case_file) {
+    ShapeTable t;
+    const std::filesystem::path dir = std::filesystem::path(case_file).parent_path();
+    t.dirs.push_back(dir.empty() ? std::filesystem::path(".") : dir);
+    t.dirs.push_back(t.dirs.front() / "shapes");
+    for (auto& d : default_shape_dirs()) {
+        t.dirs.push_back(d);
+    }
+    return t;
+}
+
+/// Largest half-axis ratio of a superquadric kiln run accepts (aspect ratio 1:10).
+constexpr double kMaxAspect = 10.0;
+
+/// Reads `shape = "name"` (absent: -1, a sphere). Loads and checks the template.
+int read_shape(Section& s, CaseSpec& c, ShapeTable& shapes) {
+    if (!s.has("shape")) {
+        s.take("shape");
+        return -1;
+    }
+    const std::string name = s.text("shape", std::nullopt);
+    if (const auto it = shapes.index.find(name); it != shapes.index.end()) {
+        return it->second;
+    }
+    std::filesystem::path file;
+    try {
+        file = find_shape_file(name, shapes.dirs);
+    } catch (const InputError& e) {
+        s.fail_at("shape", e.what());
+    }
+    geometry::ShapeTemplate t = read_shape_file(file);
+    if (std::holds_alternative<geometry::ConvexPolyhedron>(t.shape)) {
+        s.fail_at("shape", fmt::format("\"{}\" is a polyhedron; polyhedron particles are not yet "
+                                       "supported by kiln run; allowed: sphere, clump and "
+                                       "superquadric templates",
+                                       name));
+    }
+    if (const auto* sq = std::get_if<geometry::Superquadric>(&t.shape)) {
+        const double aspect = sq->half_axes.maxCoeff() / sq->half_axes.minCoeff();
+        if (aspect > kMaxAspect * (1.0 + 1e-12)) {
+            s.fail_at("shape", fmt::format("\"{}\" has a half-axis ratio of {:.3g}; kiln run "
+                                           "supports superquadrics with aspect ratios up to {:g}",
+                                           name, aspect, kMaxAspect));
+        }
+    }
+    const int k = static_cast<int>(c.scene.shapes.size());
+    c.scene.shapes.push_back(std::move(t));
+    shapes.index[name] = k;
+    return k;
+}
+
+/// Reads `orientation`: "random" or [w, x, y, z] (normalised here); `def_random` when absent.
+dynamics::OrientationSpec read_orientation(Section& s, bool def_random) {
+    dynamics::OrientationSpec o;
+    o.random = def_random;
+    const toml::node* n = s.take("orientation");
+    if (n != nullptr) {
+        if (const auto* str = n->as_string()) {
+            if (str->get() != "random") {
+                s.fail_at("orientation", fmt::format("\"{}\" is not allowed; allowed: \"random\" "
+                                                     "or a quaternion [w, x, y, z]",
+                                                     str->get()));
+            }
+            o.random = true;
+        } else {
+            const toml::array* a = n->as_array();
+            if (a == nullptr || a->size() != 4) {
+                s.fail_at("orientation", "expected \"random\" or a quaternion [w, x, y, z] "
+                                         "(body -> world, any non-zero length)");
+            }
+            double v[4];
+            for (std::size_t k = 0; k < 4; ++k) {
+                const auto x = a->get(k)->value<double>();
+                if (!x || !std::isfinite(*x)) {
+                    s.fail_at("orientation", "expected 4 finite numbers [w, x, y, z]");
+                }
+                v[k] = *x;
+            }
+            const Quat q(v[0], v[1], v[2], v[3]);
+            if (q.norm() == 0.0) {
+                s.fail_at("orientation", "the quaternion must not be zero");
+            }
+            o.random = false;
+            o.fixed = q.normalized();
+        }
+    }
+    if (o.random) {
+        s.out().insert_or_assign("orientation", "random");
+    } else {
+        s.out().insert_or_assign("orientation",
+                                 toml::array{o.fixed.w(), o.fixed.x(), o.fixed.y(), o.fixed.z()});
+    }
+    return o;
+}
+
+void read_inserts(Section& root, CaseSpec& c, const std::map<std::string, int>& mats,
+                  ShapeTable& shapes) {
     for_each_table(root, "insert", [&](Section& s, std::size_t) {
         dynamics::InsertSpec ins;
         const std::string type = s.text("type", std::nullopt, {"random", "lattice"});
@@ -514,7 +620,20 @@ void read_inserts(Section& root, CaseSpec& c, const std::map<std::string, int>& 
                                     : dynamics::InsertSpec::Kind::lattice;
         ins.material = material_index(s, "material", mats);
         ins.region = read_region(s);
-        ins.size = read_radius(s);
+        ins.shape = read_shape(s, c, shapes);
+        if (ins.shape >= 0) {
+            if (s.has("radius")) {
+                s.fail_at("radius", "a [[insert]] with a shape takes its size from the template; "
+                                    "remove radius");
+            }
+            ins.size.radius = c.scene.shapes[static_cast<std::size_t>(ins.shape)].bounding_radius();
+            ins.orientation = read_orientation(s, true);
+        } else {
+            if (s.has("orientation")) {
+                s.fail_at("orientation", "only used with a shape");
+            }
+            ins.size = read_radius(s);
+        }
         if (ins.kind == dynamics::InsertSpec::Kind::random) {
             ins.count = s.integer("count", std::nullopt, 1, 100'000'000);
         } else {
@@ -529,7 +648,7 @@ void read_inserts(Section& root, CaseSpec& c, const std::map<std::string, int>& 
         }
         ins.velocity = s.vec3("velocity", Vec3::Zero(), "m/s");
         ins.omega = s.vec3("angular_velocity", Vec3::Zero(), "rad/s");
-        s.finish({"spacing", "count"});
+        s.finish({"spacing", "count", "radius", "shape", "orientation"});
         c.scene.inserts.push_back(ins);
     });
 }
@@ -705,6 +824,9 @@ CaseSpec read_case_text(const std::string& text, const std::string& name) {
             s.text("restitution_meaning", "rebound", {"rebound", "dashpot"}) == "rebound";
         c.scene.skin = s.real("skin", 0.0, non_negative(), "m");
         c.scene.sort_particles = s.boolean("sort_particles", true);
+        c.scene.narrow_phase = s.text("narrow_phase", "newton", {"newton", "gjk_epa"}) == "newton"
+                                   ? dynamics::NarrowPhase::newton
+                                   : dynamics::NarrowPhase::gjk_epa;
         s.finish({"stiffness", "tangential_stiffness_ratio"});
         resolved.insert_or_assign("contact", std::move(out_t));
     }
@@ -744,21 +866,35 @@ CaseSpec read_case_text(const std::string& text, const std::string& name) {
     read_walls(root, c, mats);
 
     // [[particle]]
+    ShapeTable shapes = shape_table_for(name);
     for_each_table(root, "particle", [&](Section& s, std::size_t) {
         dynamics::ParticleSpec p;
         p.material = material_index(s, "material", mats);
-        p.radius = s.real("radius", std::nullopt, positive(), "m");
+        p.shape = read_shape(s, c, shapes);
+        if (p.shape >= 0) {
+            if (s.has("radius")) {
+                s.fail_at("radius", "a [[particle]] with a shape takes its size from the "
+                                    "template; remove radius");
+            }
+            p.radius = c.scene.shapes[static_cast<std::size_t>(p.shape)].bounding_radius();
+            p.orientation = read_orientation(s, false);
+        } else {
+            if (s.has("orientation")) {
+                s.fail_at("orientation", "only used with a shape");
+            }
+            p.radius = s.real("radius", std::nullopt, positive(), "m");
+        }
         p.x = s.vec3("position", std::nullopt, "m");
         p.v = s.vec3("velocity", Vec3::Zero(), "m/s");
         p.omega = s.vec3("angular_velocity", Vec3::Zero(), "rad/s");
         c.heat.particle_temperature.push_back(
             s.has("temperature") ? s.real("temperature", std::nullopt, positive(), "K")
                                  : thermal::unset);
-        s.finish({"temperature"});
+        s.finish({"radius", "shape", "orientation", "temperature"});
         c.scene.particles.push_back(p);
     });
 
-    read_inserts(root, c, mats);
+    read_inserts(root, c, mats, shapes);
     if (c.scene.particles.empty() && c.scene.inserts.empty()) {
         root.fail("insert", 0, "the case has no particles; add [[particle]] or [[insert]] tables");
     }

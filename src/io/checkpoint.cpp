@@ -11,7 +11,8 @@ namespace kiln::io {
 
 namespace {
 
-constexpr char magic[8] = {'K', 'I', 'L', 'N', 'C', 'K', 'P', '1'};
+// Version 2: body state (shape, orientation, angular momentum, inertia) and body contacts.
+constexpr char magic[8] = {'K', 'I', 'L', 'N', 'C', 'K', 'P', '2'};
 
 class Out {
   public:
@@ -25,6 +26,10 @@ class Out {
         if constexpr (std::is_same_v<T, Vec3>) {
             for (const Vec3& x : v) {
                 f_.write(reinterpret_cast<const char*>(x.data()), 3 * sizeof(double));
+            }
+        } else if constexpr (std::is_same_v<T, Quat>) {
+            for (const Quat& x : v) {
+                f_.write(reinterpret_cast<const char*>(x.coeffs().data()), 4 * sizeof(double));
             }
         } else {
             static_assert(std::is_trivially_copyable_v<T>);
@@ -58,6 +63,10 @@ class In {
         if constexpr (std::is_same_v<T, Vec3>) {
             for (Vec3& x : v) {
                 f_.read(reinterpret_cast<char*>(x.data()), 3 * sizeof(double));
+            }
+        } else if constexpr (std::is_same_v<T, Quat>) {
+            for (Quat& x : v) {
+                f_.read(reinterpret_cast<char*>(x.coeffs().data()), 4 * sizeof(double));
             }
         } else {
             f_.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(n * sizeof(T)));
@@ -97,6 +106,10 @@ template <class IO, class State, class Store> void fields(IO& io, State& s, Stor
     io.vec(p.omega);
     io.vec(p.force);
     io.vec(p.torque);
+    io.vec(p.shape);
+    io.vec(p.q);
+    io.vec(p.ang_mom);
+    io.vec(p.inertia);
     io.vec(s.nl_offsets);
     io.vec(s.nl_partners);
     io.vec(s.nl_shear);
@@ -109,7 +122,25 @@ template <class IO, class State, class Store> void fields(IO& io, State& s, Stor
     io.pod(s.next_id);
     io.pod(s.counters);
     io.str(s.rng);
+    io.pod(s.narrow_phase);
 }
+
+/// Body contacts as parallel arrays (keys are plain data; Eigen vectors are written by value).
+struct BodyContactArrays {
+    std::vector<dynamics::BodyContactKey> keys;
+    std::vector<Vec3> shear, normal, point, force;
+    std::vector<double> overlap, r_eff;
+
+    template <class IO> void io(IO& x) {
+        x.vec(keys);
+        x.vec(shear);
+        x.vec(normal);
+        x.vec(point);
+        x.vec(force);
+        x.vec(overlap);
+        x.vec(r_eff);
+    }
+};
 
 } // namespace
 
@@ -141,6 +172,8 @@ std::optional<thermal::ThermalState> read_checkpoint_heat(const std::filesystem:
     dynamics::SystemState s;
     In in(f, file.string());
     fields(in, s, s.particles);
+    BodyContactArrays b;
+    b.io(in); // body contacts come before the heat section
     char h[sizeof heat_magic] = {};
     f.read(h, sizeof h);
     if (!f || std::memcmp(h, heat_magic, sizeof heat_magic) != 0) {
@@ -162,6 +195,17 @@ void write_checkpoint(const std::filesystem::path& file, const dynamics::SystemS
         f.write(magic, sizeof magic);
         Out out(f);
         fields(out, s, s.particles);
+        BodyContactArrays b;
+        for (const auto& [k, c] : s.body_contacts) {
+            b.keys.push_back(k);
+            b.shear.push_back(c.shear);
+            b.normal.push_back(c.normal);
+            b.point.push_back(c.point);
+            b.force.push_back(c.force);
+            b.overlap.push_back(c.overlap);
+            b.r_eff.push_back(c.r_eff);
+        }
+        b.io(out);
         if (heat != nullptr) {
             f.write(heat_magic, sizeof heat_magic);
             thermal::ThermalState copy = *heat;
@@ -187,6 +231,18 @@ dynamics::SystemState read_checkpoint(const std::filesystem::path& file) {
     dynamics::SystemState s;
     In in(f, file.string());
     fields(in, s, s.particles);
+    BodyContactArrays b;
+    b.io(in);
+    const std::size_t n = b.keys.size();
+    if (b.shear.size() != n || b.normal.size() != n || b.point.size() != n || b.force.size() != n ||
+        b.overlap.size() != n || b.r_eff.size() != n) {
+        throw InputError(file.string(), 0, "", "damaged checkpoint (body contact arrays differ)");
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+        s.body_contacts.emplace_back(b.keys[k],
+                                     dynamics::BodyContact{b.shear[k], b.normal[k], b.point[k],
+                                                           b.overlap[k], b.r_eff[k], b.force[k]});
+    }
     return s;
 }
 

@@ -67,6 +67,10 @@ void write_summary_json(const std::filesystem::path& file, const RunSummary& s) 
     field("wall_seconds", json_number(s.wall_seconds));
     field("particle_steps_per_second", json_number(s.particle_steps_per_second));
     field("neighbour_builds", fmt::format("{}", s.neighbour_builds));
+    field("bodies", fmt::format("{}", s.bodies));
+    field("narrow_phase_calls", fmt::format("{}", s.narrow_phase_calls));
+    field("narrow_phase_fallbacks", fmt::format("{}", s.narrow_phase_fallbacks));
+    field("narrow_phase_failures", fmt::format("{}", s.narrow_phase_failures));
     field("time_step", json_number(s.time_step));
     field("rayleigh_time_step", json_number(s.rayleigh_time_step));
     field("contact_time", json_number(s.contact_time));

@@ -22,10 +22,14 @@ struct RunSummary {
     long neighbour_builds = 0;            ///< neighbour-list builds (-)
     std::vector<std::string> warnings;    ///< set-up warnings
     std::vector<std::pair<std::string, double>> final_monitors; ///< monitors at the end (SI)
-    std::string status;            ///< "completed" or "failed: <reason>"
-    double time_step = 0;          ///< mechanical time step (s)
-    double rayleigh_time_step = 0; ///< smallest Rayleigh critical step (s)
-    double contact_time = 0;       ///< shortest expected contact duration (s)
+    std::string status;              ///< "completed" or "failed: <reason>"
+    double time_step = 0;            ///< mechanical time step (s)
+    double rayleigh_time_step = 0;   ///< smallest Rayleigh critical step (s)
+    double contact_time = 0;         ///< shortest expected contact duration (s)
+    long bodies = 0;                 ///< non-spherical particles at the end (-)
+    long narrow_phase_calls = 0;     ///< superquadric narrow-phase queries (-)
+    long narrow_phase_fallbacks = 0; ///< Newton did not converge, GJK/EPA answered (-)
+    long narrow_phase_failures = 0;  ///< no method converged, contact skipped for a step (-)
     /// Further top-level objects: key and JSON text (e.g. "heat" from thermal::ThermalSystem).
     std::vector<std::pair<std::string, std::string>> sections;
 };

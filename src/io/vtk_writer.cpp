@@ -239,15 +239,87 @@ void ParticleSeriesWriter::write(const dynamics::System& sys) {
         }
     }
 
+    if (sys.has_bodies()) {
+        vtkNew<vtkDoubleArray> orientation;
+        orientation->SetName("orientation");
+        orientation->SetNumberOfComponents(4);
+        orientation->SetNumberOfTuples(n);
+        for (std::size_t i = 0; i < p.size(); ++i) {
+            const Quat& q = p.q[i];
+            const double wxyz[4] = {q.w(), q.x(), q.y(), q.z()};
+            orientation->SetTypedTuple(static_cast<vtkIdType>(i), wxyz);
+        }
+        data->AddArray(orientation);
+        vtkNew<vtkIntArray> shape;
+        shape->SetName("shape");
+        shape->SetNumberOfTuples(n);
+        for (std::size_t i = 0; i < p.size(); ++i) {
+            shape->SetValue(static_cast<vtkIdType>(i), p.shape[i]);
+        }
+        data->AddArray(shape);
+    }
+
     const std::string name = fmt::format("particles/particles_{:06d}.vtp", frames_.size());
     write_polydata(pd, dir_ / name);
     frames_.push_back({sys.time(), name});
-    write_collection();
+    write_collection(frames_, "particles.pvd");
+    if (sys.has_bodies()) {
+        write_bodies(sys);
+    }
+}
+
+void ParticleSeriesWriter::write_bodies(const dynamics::System& sys) {
+    const ParticleStore& p = sys.particles();
+    vtkNew<vtkPoints> pts;
+    pts->SetDataTypeToDouble();
+    vtkNew<vtkCellArray> cells;
+    vtkNew<vtkTypeInt64Array> id;
+    id->SetName("id");
+    vtkNew<vtkDoubleArray> velocity;
+    velocity->SetName("velocity");
+    velocity->SetNumberOfComponents(3);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        if (p.shape[i] < 0) {
+            continue;
+        }
+        auto it = meshes_.find(p.shape[i]);
+        if (it == meshes_.end()) {
+            const auto& t = sys.spec().shapes.at(static_cast<std::size_t>(p.shape[i]));
+            it = meshes_.emplace(p.shape[i], geometry::surface_mesh(t.shape, 12)).first;
+        }
+        const geometry::SurfaceMesh m = geometry::posed(it->second, p.x[i], p.q[i]);
+        const vtkIdType first = pts->GetNumberOfPoints();
+        for (const Vec3& v : m.vertices) {
+            pts->InsertNextPoint(v.data());
+        }
+        for (const auto& t : m.triangles) {
+            const vtkIdType ids[3] = {first + t[0], first + t[1], first + t[2]};
+            cells->InsertNextCell(3, ids);
+            id->InsertNextValue(p.id[i]);
+            velocity->InsertNextTuple(p.v[i].data());
+        }
+    }
+    vtkNew<vtkPolyData> pd;
+    pd->SetPoints(pts);
+    pd->SetPolys(cells);
+    pd->GetCellData()->AddArray(id);
+    pd->GetCellData()->AddArray(velocity);
+    make_directory(dir_ / "bodies");
+    const std::string name = fmt::format("bodies/bodies_{:06d}.vtp", body_frames_.size());
+    write_polydata(pd, dir_ / name);
+    body_frames_.push_back({sys.time(), name});
+    write_collection(body_frames_, "bodies.pvd");
 }
 
 std::size_t ParticleSeriesWriter::resume(double time) {
-    frames_.clear();
-    const std::filesystem::path file = dir_ / "particles.pvd";
+    resume_collection(time, "bodies.pvd", body_frames_);
+    return resume_collection(time, "particles.pvd", frames_);
+}
+
+std::size_t ParticleSeriesWriter::resume_collection(double time, const std::string& pvd,
+                                                    std::vector<Frame>& frames) {
+    frames.clear();
+    const std::filesystem::path file = dir_ / pvd;
     if (!std::filesystem::exists(file)) {
         return 0;
     }
@@ -273,30 +345,31 @@ std::size_t ParticleSeriesWriter::resume(double time) {
         }
         Frame frame{frame_time, line.substr(f + 6, end - f - 6)};
         if (frame.time <= time_limit) {
-            frames_.push_back(std::move(frame));
+            frames.push_back(std::move(frame));
         } else {
             std::error_code ec; // a frame file already gone is not an error
             std::filesystem::remove(dir_ / frame.file, ec);
         }
     }
-    write_collection();
-    return frames_.size();
+    write_collection(frames, pvd);
+    return frames.size();
 }
 
-void ParticleSeriesWriter::write_collection() const {
+void ParticleSeriesWriter::write_collection(const std::vector<Frame>& frames,
+                                            const std::string& pvd) const {
     constexpr const char* byte_order =
         std::endian::native == std::endian::little ? "LittleEndian" : "BigEndian";
     std::string xml = fmt::format("<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" "
                                   "version=\"0.1\" byte_order=\"{}\">\n  <Collection>\n",
                                   byte_order);
-    for (const Frame& f : frames_) {
+    for (const Frame& f : frames) {
         xml += fmt::format("    <DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{}\"/>\n",
                            f.time, f.file);
     }
     xml += "  </Collection>\n</VTKFile>\n";
 
-    const std::filesystem::path file = dir_ / "particles.pvd";
-    const std::filesystem::path tmp = dir_ / "particles.pvd.tmp";
+    const std::filesystem::path file = dir_ / pvd;
+    const std::filesystem::path tmp = dir_ / (pvd + ".tmp");
     write_text_file(tmp, xml);
     std::error_code ec;
     std::filesystem::rename(tmp, file, ec);

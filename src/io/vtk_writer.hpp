@@ -5,8 +5,10 @@
 #include "dynamics/scene_spec.hpp"
 #include "dynamics/system.hpp"
 #include "thermal/thermal_system.hpp"
+#include "geometry/surface_mesh.hpp"
 
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -14,6 +16,8 @@ namespace kiln::io {
 
 /// Writes particle frames out_dir/particles/particles_NNNNNN.vtp and keeps out_dir/particles.pvd
 /// listing every frame written so far, so the series can be opened at any moment during a run.
+/// Scenes with non-spherical particles also get out_dir/bodies/bodies_NNNNNN.vtp (+ bodies.pvd):
+/// every body's posed surface mesh (m, world frame) with per-cell particle id and velocity.
 class ParticleSeriesWriter {
   public:
     /// Creates out_dir/particles/; throws InputError when it cannot.
@@ -50,11 +54,15 @@ class ParticleSeriesWriter {
         std::string file;
     };
 
-    void write_collection() const;
+    void write_collection(const std::vector<Frame>& frames, const std::string& pvd) const;
+    std::size_t resume_collection(double time, const std::string& pvd, std::vector<Frame>& frames);
+    void write_bodies(const dynamics::System& sys);
 
     std::filesystem::path dir_;
     std::vector<Frame> frames_;
     const thermal::ThermalSystem* heat_ = nullptr;
+    std::vector<Frame> body_frames_;
+    std::map<int, geometry::SurfaceMesh> meshes_; // body-frame mesh per shape template
 };
 
 } // namespace kiln::io

@@ -2,6 +2,9 @@
 
 #include "core/error.hpp"
 
+#include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <gtest/gtest.h>
 #include <string>
 
@@ -46,6 +49,16 @@ std::string edit(const std::string& from, const std::string& to) {
 std::string error_of(const std::string& text) {
     try {
         read_case_text(text, "case.toml");
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    return "";
+}
+
+/// The error message of reading `text` as if it were the file `path`, or "" when it reads fine.
+std::string error_of_file(const std::string& text, const std::string& path) {
+    try {
+        read_case_text(text, path);
     } catch (const InputError& e) {
         return e.what();
     }
@@ -156,6 +169,135 @@ TEST(CaseReader, RegionMaxMustExceedMin) {
 TEST(CaseReader, UnknownMonitorIsRejected) {
     const std::string e = error_of(good + "\n[output]\nmonitors = [\"time\", \"temperature\"]\n");
     EXPECT_NE(e.find("output.monitors: \"temperature\" is not allowed"), std::string::npos) << e;
+}
+
+// --- Non-spherical particles -------------------------------------------------------------------
+
+namespace shapes_test {
+
+/// A folder with one case and its own shape templates, removed at the end of the test.
+struct CaseFolder {
+    std::filesystem::path dir;
+    CaseFolder() {
+        dir = std::filesystem::temp_directory_path() / "kiln_test_case_shapes";
+        std::filesystem::create_directories(dir);
+        write("rod_ok.toml", "kind = \"superquadric\"\nhalf_axes = [1.0e-3, 1.0e-4, 1.0e-4]\n"
+                             "exponents = [0.5, 1.0]\n");
+        write("rod_long.toml", "kind = \"superquadric\"\nhalf_axes = [1.1e-3, 1.0e-4, 1.0e-4]\n"
+                               "exponents = [0.5, 1.0]\n");
+    }
+    ~CaseFolder() { std::filesystem::remove_all(dir); }
+    CaseFolder(const CaseFolder&) = delete;
+    CaseFolder& operator=(const CaseFolder&) = delete;
+    void write(const std::string& name, const std::string& text) const {
+        std::ofstream(dir / name) << text;
+    }
+    [[nodiscard]] std::string path() const { return (dir / "case.toml").string(); }
+};
+
+const std::string insert_sphere = R"([[insert]]
+type = "random"
+material = "glass"
+region = { min = [0, 0, 0.01], max = [0.02, 0.02, 0.04] }
+count = 100
+radius = { distribution = "uniform", min = 0.8e-3, max = 1.2e-3 }
+)";
+
+std::string with_bodies(const std::string& body_tables) {
+    std::string s = good;
+    return s.replace(s.find(insert_sphere), insert_sphere.size(), body_tables);
+}
+
+} // namespace shapes_test
+
+TEST(CaseReader, ShapesAreLoadedByNameWithOrientationAndNarrowPhase) {
+    const std::string text = shapes_test::with_bodies(R"([contact]
+narrow_phase = "gjk_epa"
+
+[[insert]]
+type = "random"
+material = "glass"
+region = { min = [0, 0, 0.01], max = [0.02, 0.02, 0.04] }
+count = 10
+shape = "ellipsoid_123"
+
+[[insert]]
+type = "random"
+material = "glass"
+region = { min = [0, 0, 0.01], max = [0.02, 0.02, 0.04] }
+count = 10
+shape = "ellipsoid_123"
+orientation = [1, 0, 0, 1]
+
+[[particle]]
+material = "glass"
+position = [0.01, 0.01, 0.005]
+shape = "cylinder_12"
+)");
+    const CaseSpec c = read_case_text(text, "case.toml");
+    ASSERT_EQ(c.scene.shapes.size(), 2U); // loaded once per name
+    EXPECT_EQ(c.scene.narrow_phase, dynamics::NarrowPhase::gjk_epa);
+    ASSERT_EQ(c.scene.inserts.size(), 2U);
+    EXPECT_EQ(c.scene.inserts[0].shape, c.scene.inserts[1].shape);
+    EXPECT_TRUE(c.scene.inserts[0].orientation.random); // inserts default to random
+    EXPECT_FALSE(c.scene.inserts[1].orientation.random);
+    constexpr double rounding = 1e-15; // normalised quaternion of [1, 0, 0, 1]
+    EXPECT_NEAR(c.scene.inserts[1].orientation.fixed.w(), std::sqrt(0.5), rounding);
+    EXPECT_DOUBLE_EQ(
+        c.scene.inserts[0].size.radius,
+        c.scene.shapes[static_cast<std::size_t>(c.scene.inserts[0].shape)].bounding_radius());
+    ASSERT_EQ(c.scene.particles.size(), 1U);
+    EXPECT_FALSE(c.scene.particles[0].orientation.random); // particles default to identity
+    EXPECT_NE(c.resolved_toml.find("narrow_phase = 'gjk_epa'"), std::string::npos);
+}
+
+TEST(CaseReader, NarrowPhaseDefaultsToNewton) {
+    EXPECT_EQ(read_case_text(good, "case.toml").scene.narrow_phase, dynamics::NarrowPhase::newton);
+    EXPECT_NE(error_of(edit("[[insert]]", "[contact]\nnarrow_phase = \"mpr\"\n\n[[insert]]"))
+                  .find("contact.narrow_phase"),
+              std::string::npos);
+}
+
+TEST(CaseReader, ShapeErrorsAreLocated) {
+    const auto body = [](const std::string& extra) {
+        return shapes_test::with_bodies("[[particle]]\nmaterial = \"glass\"\n"
+                                        "position = [0.01, 0.01, 0.005]\n" +
+                                        extra);
+    };
+    // Unknown template: the folders searched are listed.
+    const std::string unknown = error_of(body("shape = \"no_such_shape\"\n"));
+    EXPECT_NE(unknown.find("case.toml:22: particle[0].shape"), std::string::npos) << unknown;
+    // A radius next to a shape.
+    EXPECT_NE(error_of(body("shape = \"ellipsoid_123\"\nradius = 1e-3\n")).find("remove radius"),
+              std::string::npos);
+    // Orientation: only "random" or four numbers, and only with a shape.
+    EXPECT_NE(error_of(body("shape = \"ellipsoid_123\"\norientation = [1, 0, 0]\n"))
+                  .find("particle[0].orientation"),
+              std::string::npos);
+    EXPECT_NE(error_of(body("shape = \"ellipsoid_123\"\norientation = \"any\"\n"))
+                  .find("allowed: \"random\""),
+              std::string::npos);
+    EXPECT_NE(error_of(body("shape = \"ellipsoid_123\"\norientation = [0, 0, 0, 0]\n"))
+                  .find("must not be zero"),
+              std::string::npos);
+    EXPECT_NE(error_of(body("radius = 1e-3\norientation = \"random\"\n")).find("only used with"),
+              std::string::npos);
+    // Polyhedra are not yet run.
+    EXPECT_NE(error_of(body("shape = \"cube\"\n")).find("not yet supported by kiln run"),
+              std::string::npos);
+}
+
+TEST(CaseReader, SuperquadricAspectRatioAboveTenIsRefused) {
+    const shapes_test::CaseFolder folder;
+    const auto text = [](const std::string& name) {
+        return shapes_test::with_bodies("[[particle]]\nmaterial = \"glass\"\n"
+                                        "position = [0.01, 0.01, 0.005]\nshape = \"" +
+                                        name + "\"\n");
+    };
+    // Templates next to the case file are found first.
+    EXPECT_EQ(read_case_text(text("rod_ok"), folder.path()).scene.shapes.size(), 1U);
+    const std::string e = error_of_file(text("rod_long"), folder.path());
+    EXPECT_NE(e.find("aspect ratios up to 10"), std::string::npos) << e;
 }
 
 } // namespace

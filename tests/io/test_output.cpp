@@ -2,6 +2,7 @@
 #include "dynamics/system.hpp"
 #include "io/case_spec.hpp"
 #include "io/monitors.hpp"
+#include "io/shape_reader.hpp"
 #include "io/summary.hpp"
 #include "io/vtk_writer.hpp"
 
@@ -279,6 +280,49 @@ TEST(ParticleSeriesWriter, FramesReadBackAndCollectionListsThem) {
     EXPECT_NE(pvd.find("file=\"particles/particles_000001.vtp\""), std::string::npos);
     EXPECT_NE(pvd.find("</VTKFile>"), std::string::npos);
     EXPECT_FALSE(fs::exists(dir.path() / "particles.pvd.tmp"));
+}
+
+TEST(ParticleSeriesWriter, BodiesAreDrawnAsTheirPosedSurfaces) {
+    const TempDir dir;
+    SceneSpec s;
+    s.materials.push_back({"m", 1e7, 0.3, 2500, 0.5, 0.3, 0.0});
+    s.time_step = 1e-5;
+    s.shapes.push_back(read_shape_file(find_shape_file("superball", default_shape_dirs())));
+    dynamics::ParticleSpec b;
+    b.shape = 0;
+    b.x = Vec3(0.001, 0.002, 0.003);
+    b.v = Vec3(0.1, 0, 0);
+    b.orientation.fixed = Quat(Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()));
+    s.particles.push_back(b);
+    s.particles.emplace_back(0, 1e-3, Vec3(0.01, 0, 0), Vec3::Zero(), Vec3::Zero());
+    const System sys(s);
+    ParticleSeriesWriter w(dir.path());
+    w.write(sys);
+    ASSERT_TRUE(fs::exists(dir.path() / "bodies.pvd"));
+    vtkNew<vtkXMLPolyDataReader> reader;
+    reader->SetFileName((dir.path() / "bodies" / "bodies_000000.vtp").string().c_str());
+    reader->Update();
+    vtkPolyData* pd = reader->GetOutput();
+    // One body (the sphere is not drawn here): its mesh, every vertex on the posed surface.
+    const geometry::SurfaceMesh mesh = geometry::surface_mesh(s.shapes[0].shape, 12);
+    ASSERT_EQ(pd->GetNumberOfPoints(), static_cast<vtkIdType>(mesh.vertices.size()));
+    EXPECT_EQ(pd->GetNumberOfPolys(), static_cast<vtkIdType>(mesh.triangles.size()));
+    const auto& sq = std::get<geometry::Superquadric>(s.shapes[0].shape);
+    const ParticleStore& p = sys.particles();
+    const std::size_t i = p.shape[0] >= 0 ? 0 : 1;
+    constexpr double on_surface = 1e-9; // |F| of a vertex mapped back to the body frame
+    for (vtkIdType k = 0; k < pd->GetNumberOfPoints(); ++k) {
+        const Vec3 x(pd->GetPoint(k)[0], pd->GetPoint(k)[1], pd->GetPoint(k)[2]);
+        EXPECT_NEAR(sq.inside_outside(p.q[i].conjugate() * (x - p.x[i])), 0.0, on_surface);
+    }
+    vtkDataArray* id = pd->GetCellData()->GetArray("id");
+    vtkDataArray* velocity = pd->GetCellData()->GetArray("velocity");
+    ASSERT_NE(id, nullptr);
+    ASSERT_NE(velocity, nullptr);
+    EXPECT_EQ(static_cast<std::int64_t>(id->GetComponent(0, 0)), p.id[i]);
+    EXPECT_EQ(velocity->GetComponent(0, 0), 0.1);
+    EXPECT_NE(read_text(dir.path() / "bodies.pvd").find("bodies/bodies_000000.vtp"),
+              std::string::npos);
 }
 
 TEST(ParticleSeriesWriter, WallsAreOneQuadPerPlaneAndATubePerCylinder) {

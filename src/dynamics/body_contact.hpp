@@ -1,0 +1,86 @@
+#pragma once
+// Contact geometry of non-spherical particles (bodies) in the run loop. A particle is split into
+// elements: a sphere or a clump sub-sphere is a sphere element, a superquadric is one convex
+// element. Element pairs are dispatched by kind: sphere-sphere analytically, anything with a convex
+// element through the support-map narrow phase (geometry/convex_contact.hpp); a polyhedron will be
+// one more element kind with its own overload (geometry/polyhedron_contact.hpp, not wired yet).
+//
+// Normal convention: `normal` points from element b to element a (world frame), as in
+// convex_contact.hpp; moving a by overlap * normal separates the two.
+
+#include "core/types.hpp"
+#include "dynamics/scene_spec.hpp"
+#include "dynamics/wall.hpp"
+#include "geometry/convex_contact.hpp"
+#include "geometry/shape.hpp"
+
+#include <compare>
+#include <cstdint>
+#include <vector>
+
+namespace kiln::dynamics {
+
+/// One element of a posed particle, world frame.
+struct Element {
+    enum class Kind { sphere, superquadric };
+    Kind kind = Kind::sphere;
+    Vec3 centre = Vec3::Zero();                 ///< sphere centre or body centre (m, world)
+    double radius = 0.0;                        ///< sphere radius or bounding radius (m)
+    const geometry::Superquadric* sq = nullptr; ///< superquadric geometry (body frame)
+    Quat q = Quat::Identity();                  ///< orientation of a superquadric, body -> world
+    double min_size = 0.0;                      ///< sphere radius or smallest half-axis (m)
+};
+
+/// Key of one element contact: particle ids a < b (b = -1 - wall index for a wall) and the element
+/// indices on each side (0 for a sphere, a superquadric and a wall).
+struct BodyContactKey {
+    std::int64_t a = 0;  ///< id of particle a (the smaller id of a particle pair)
+    std::int64_t b = 0;  ///< id of particle b, or -1 - wall index
+    std::int32_t ea = 0; ///< element index in a
+    std::int32_t eb = 0; ///< element index in b
+    /// Ordered by (a, b, ea, eb).
+    auto operator<=>(const BodyContactKey&) const = default;
+};
+
+/// One element contact involving a body, world frame: the history carried to the next step and
+/// the geometry of the last evaluation (reachable for output and contact heat).
+struct BodyContact {
+    Vec3 shear = Vec3::Zero();   ///< tangential history (m), on a relative to b
+    Vec3 normal = Vec3::UnitX(); ///< unit normal from b to a (also the Newton warm start)
+    Vec3 point = Vec3::Zero();   ///< contact point (m)
+    double overlap = 0.0;        ///< overlap (m)
+    double r_eff = 0.0;          ///< effective radius the law used (m)
+    Vec3 force = Vec3::Zero();   ///< force on a (N)
+};
+
+/// Result of one element-element or element-wall geometry query, world frame.
+struct ElementContact {
+    bool touching = false;       ///< overlap > 0
+    bool converged = true;       ///< narrow phase converged (false: failure, contact skipped)
+    bool fell_back = false;      ///< Newton failed and GJK/EPA answered instead
+    double overlap = 0.0;        ///< (m)
+    Vec3 normal = Vec3::UnitX(); ///< unit, from b (or the wall) to a
+    Vec3 point = Vec3::Zero();   ///< contact point (m)
+    double r_eff = 0.0;          ///< effective radius for the law (m), clamped (see .cpp)
+};
+
+/// Narrow-phase counters of a run (summed over the steps).
+struct NarrowPhaseCounters {
+    long calls = 0;     ///< superquadric element queries
+    long fallbacks = 0; ///< Newton did not converge, GJK/EPA answered
+    long failures = 0;  ///< no method converged: the contact was skipped for that step
+};
+
+/// Appends the elements of a particle (centre x, orientation q, radius r) of template t (nullptr:
+/// a sphere) to `out`.
+void append_elements(const geometry::ShapeTemplate* t, const Vec3& x, const Quat& q, double r,
+                     std::vector<Element>& out);
+
+/// Contact of two elements; `warm` is the previous normal (b to a) or nullptr.
+[[nodiscard]] ElementContact element_contact(const Element& a, const Element& b, NarrowPhase method,
+                                             const Vec3* warm);
+
+/// Contact of an element with a wall (normal from the wall into the element).
+[[nodiscard]] ElementContact element_wall_contact(const Element& a, const WallShape& w);
+
+} // namespace kiln::dynamics

@@ -1,0 +1,168 @@
+// Non-spherical particles in the step loop: element contacts of pairs involving a body, body-wall
+// contacts, and the rotation update. See docs/architecture.md ("Bodies in the run loop") and
+// docs/theory/contact.md ("Non-spherical contacts").
+
+#include "dynamics/system.hpp"
+
+#include "geometry/rotation.hpp"
+
+#include <algorithm>
+#include <utility>
+
+namespace kiln::dynamics {
+
+namespace {
+
+/// Smallest element size of a contact, for the overlap ratio.
+double ratio_size(const Element& a, const Element* b) {
+    return 2.0 * std::min(a.min_size, b ? b->min_size : a.min_size);
+}
+
+} // namespace
+
+void System::rotate_bodies(bool drift) {
+    // Half kick of the world angular momentum, then (drift) the free rotation over the step by the
+    // symmetric splitting of geometry/rotation.hpp; omega is derived from (q, L) for the contacts.
+    const double h = 0.5 * spec_.time_step;
+    for (const std::uint32_t i : bodies_) {
+        geometry::kick_angular_momentum(p_.ang_mom[i], p_.torque[i], h);
+        if (drift) {
+            geometry::free_rotate(p_.q[i], p_.ang_mom[i], p_.inertia[i], spec_.time_step);
+        }
+        p_.omega[i] = geometry::angular_velocity_world(p_.q[i], p_.ang_mom[i], p_.inertia[i]);
+    }
+}
+
+void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
+    std::map<BodyContactKey, BodyContact> next;
+    const double dt = spec_.time_step;
+    const auto tmpl = [&](std::uint32_t i) -> const geometry::ShapeTemplate* {
+        return p_.shape[i] >= 0 ? &spec_.shapes[static_cast<std::size_t>(p_.shape[i])] : nullptr;
+    };
+    const auto is_convex = [](const Element& e) { return e.kind != Element::Kind::sphere; };
+    // Elements of every particle, posed once per step.
+    elements_.clear();
+    element_begin_.assign(p_.size() + 1, 0);
+    for (std::size_t i = 0; i < p_.size(); ++i) {
+        element_begin_[i] = static_cast<std::uint32_t>(elements_.size());
+        append_elements(tmpl(static_cast<std::uint32_t>(i)), p_.x[i], p_.q[i], p_.radius[i],
+                        elements_);
+    }
+    element_begin_[p_.size()] = static_cast<std::uint32_t>(elements_.size());
+
+    std::visit(
+        [&](const auto& law) {
+            // One element contact: the law at the contact point with the velocity of that point;
+            // force on a, reaction on b (b < 0: a wall, at rest with infinite mass).
+            const auto apply = [&](std::uint32_t a, long b, const BodyContactKey& key,
+                                   const ElementContact& ec, const BodyContact* old, int material_b,
+                                   double ratio, ChunkTotals& t) {
+                const Vec3 ra = ec.point - p_.x[a];
+                Vec3 v_rel = p_.v[a] + p_.omega[a].cross(ra);
+                double m_eff = p_.mass[a];
+                Vec3 rb = Vec3::Zero();
+                if (b >= 0) {
+                    const auto j = static_cast<std::uint32_t>(b);
+                    rb = ec.point - p_.x[j];
+                    v_rel -= p_.v[j] + p_.omega[j].cross(rb);
+                    m_eff = p_.mass[a] * p_.mass[j] / (p_.mass[a] + p_.mass[j]);
+                }
+                contact::ContactInput in{ec.normal, ec.overlap, ec.r_eff,     m_eff,       0.0,
+                                         0.0,       v_rel,      Vec3::Zero(), Vec3::Zero()};
+                Vec3 shear = old ? old->shear : Vec3::Zero();
+                const contact::ContactOutput out = contact::evaluate(
+                    law, spec_.contact, pairs_.at(p_.material[a], material_b), in, shear, dt);
+                p_.force[a] += out.force;
+                p_.torque[a] += ra.cross(out.force);
+                if (b >= 0) {
+                    const auto j = static_cast<std::uint32_t>(b);
+                    p_.force[j] -= out.force;
+                    p_.torque[j] -= rb.cross(out.force);
+                }
+                next[key] = {shear, ec.normal, ec.point, ec.overlap, ec.r_eff, out.force};
+                t.energy += out.elastic_energy;
+                t.max_ratio = std::max(t.max_ratio, ratio);
+                ++t.contacts;
+            };
+
+            // Pairs: the particle with the smaller id is a, so keys and histories do not depend
+            // on the list's owner/partner order.
+            const auto& nb = nl_.partners();
+            const auto& owner = nl_.owners();
+            for (const std::uint32_t k : body_entries_) {
+                std::uint32_t a = owner[k];
+                std::uint32_t b = nb[k];
+                const double rsum = p_.radius[a] + p_.radius[b];
+                if ((p_.x[a] - p_.x[b]).squaredNorm() >= rsum * rsum) {
+                    continue;
+                }
+                if (p_.id[a] > p_.id[b]) {
+                    std::swap(a, b);
+                }
+                const std::uint32_t a0 = element_begin_[a];
+                const std::uint32_t b0 = element_begin_[b];
+                for (std::uint32_t ea = a0; ea < element_begin_[a + 1]; ++ea) {
+                    const Element& A = elements_[ea];
+                    const double rab = A.radius + p_.radius[b];
+                    if ((A.centre - p_.x[b]).squaredNorm() >= rab * rab) {
+                        continue;
+                    }
+                    for (std::uint32_t eb = b0; eb < element_begin_[b + 1]; ++eb) {
+                        const Element& B = elements_[eb];
+                        const double re = A.radius + B.radius;
+                        if ((A.centre - B.centre).squaredNorm() >= re * re) {
+                            continue; // bounding spheres apart: no contact, no history
+                        }
+                        const BodyContactKey key{p_.id[a], p_.id[b],
+                                                 static_cast<std::int32_t>(ea - a0),
+                                                 static_cast<std::int32_t>(eb - b0)};
+                        const auto it = body_contacts_.find(key);
+                        const BodyContact* old = it == body_contacts_.end() ? nullptr : &it->second;
+                        // Warm start: the last normal, else the line of centres (a new contact).
+                        const Vec3 guess = old ? old->normal : Vec3(A.centre - B.centre);
+                        const bool usable = guess.squaredNorm() > 0.0;
+                        const Vec3 warm = usable ? Vec3(guess.normalized()) : Vec3::UnitZ();
+                        const ElementContact ec = element_contact(A, B, spec_.narrow_phase, &warm);
+                        if (is_convex(A) || is_convex(B)) {
+                            ++np_.calls;
+                            np_.fallbacks += ec.fell_back ? 1 : 0;
+                            np_.failures += ec.converged ? 0 : 1;
+                        }
+                        if (ec.touching) {
+                            apply(a, b, key, ec, old, p_.material[b],
+                                  ec.overlap / ratio_size(A, &B), pair_totals);
+                        }
+                    }
+                }
+            }
+
+            // Walls, body by body and wall by wall.
+            for (const std::uint32_t a : bodies_) {
+                for (std::size_t w = 0; w < spec_.walls.size(); ++w) {
+                    const WallShape& ws = spec_.walls[w].shape;
+                    const WallContact bound = std::visit(
+                        [&](const auto& s) { return wall_contact(s, p_.x[a], p_.radius[a]); }, ws);
+                    if (!(bound.overlap > 0.0)) {
+                        continue;
+                    }
+                    const std::uint32_t a0 = element_begin_[a];
+                    for (std::uint32_t ea = a0; ea < element_begin_[a + 1]; ++ea) {
+                        const ElementContact ec = element_wall_contact(elements_[ea], ws);
+                        if (!ec.touching) {
+                            continue;
+                        }
+                        const BodyContactKey key{p_.id[a], -1 - static_cast<std::int64_t>(w),
+                                                 static_cast<std::int32_t>(ea - a0), 0};
+                        const auto it = body_contacts_.find(key);
+                        apply(a, -1, key, ec, it == body_contacts_.end() ? nullptr : &it->second,
+                              spec_.walls[w].material,
+                              ec.overlap / ratio_size(elements_[ea], nullptr), wall_totals);
+                    }
+                }
+            }
+        },
+        spec_.contact.law);
+    body_contacts_.swap(next);
+}
+
+} // namespace kiln::dynamics
