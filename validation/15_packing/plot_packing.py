@@ -17,7 +17,7 @@ phi = {}
 with open(os.path.join(build, "validation", "15_packing", "results.csv")) as f:
     for row in csv.DictReader(f):
         if row["quantity"].endswith("solid fraction"):
-            phi[row["quantity"].split(":")[0]] = float(row["measured"])
+            phi[row["quantity"].split(": ")[0]] = float(row["measured"])
 
 fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.6), sharey=True)
 # Spheroids: aspect ratio. Donev et al. 2004 (Fig. 2, read from the figure, +-0.01).
