@@ -7,7 +7,7 @@ build=${1:-"$here/build"}
 
 packages=(g++ cmake make git ca-certificates pkg-config
           libeigen3-dev libtomlplusplus-dev libcli11-dev libfmt-dev libvtk9-dev
-          libgtest-dev libbenchmark-dev libccd-dev libsuitesparse-dev libcgal-dev python3 python3-numpy python3-matplotlib)
+          libgtest-dev libbenchmark-dev libccd-dev libfcl-dev libsuitesparse-dev libcgal-dev python3 python3-numpy python3-matplotlib)
 
 missing=()
 for p in "${packages[@]}"; do

@@ -1,0 +1,174 @@
+// Cost per pair of the polyhedron contact methods on random overlapping poses of each shipped
+// polyhedron with itself (overlap 1e-4 to 5e-2 of the bounding radius), by feature-edge count:
+// fast common plane with and without the points and patch, libccd GJK + EPA and MPR; a
+// sphere-sphere overlap for comparison; mesh-wall queries of a sphere and a cube. Run:
+// build/bench/kiln_bench_polyhedra
+
+#include "geometry/mesh_wall.hpp"
+#include "geometry/polyhedron_contact.hpp"
+#include "io/shape_reader.hpp"
+
+#include <benchmark/benchmark.h>
+#include <cmath>
+#include <map>
+#include <random>
+#include <vector>
+
+namespace {
+
+using kiln::Quat;
+using kiln::Vec3;
+namespace g = kiln::geometry;
+
+const g::PolyhedronFeatures& shape(const std::string& name) {
+    static std::map<std::string, g::PolyhedronFeatures> cache;
+    auto it = cache.find(name);
+    if (it == cache.end()) {
+        const auto t = kiln::io::read_shape_file(
+            kiln::io::find_shape_file(name, kiln::io::default_shape_dirs()));
+        it = cache.emplace(name, g::polyhedron_features(std::get<g::ConvexPolyhedron>(t.shape)))
+                 .first;
+    }
+    return it->second;
+}
+
+struct Pair {
+    g::PosedPolyhedron a;
+    g::PosedPolyhedron b;
+};
+
+std::vector<Pair> poses(const g::PolyhedronFeatures& s) {
+    std::mt19937_64 rng(1);
+    std::normal_distribution<double> nd;
+    std::uniform_real_distribution<double> ud(std::log(1e-4), std::log(5e-2));
+    std::vector<Pair> out;
+    for (int i = 0; i < 256; ++i) {
+        Pair p{{&s, Vec3::Zero(), Quat(nd(rng), nd(rng), nd(rng), nd(rng)).normalized()},
+               {&s, Vec3::Zero(), Quat(nd(rng), nd(rng), nd(rng), nd(rng)).normalized()}};
+        const Vec3 u = Vec3(nd(rng), nd(rng), nd(rng)).normalized();
+        p.b.x = p.a.support(u) - std::exp(ud(rng)) * s.radius * u - p.b.support(-u);
+        out.push_back(p);
+    }
+    return out;
+}
+
+enum class Method { kPlane, kPlanePatch, kEpa, kMpr };
+
+void run(benchmark::State& state, const std::string& name, Method m) {
+    const g::PolyhedronFeatures& s = shape(name);
+    const std::vector<Pair> pairs = poses(s);
+    std::size_t i = 0;
+    for (auto _ : state) {
+        const Pair& p = pairs[i++ % pairs.size()];
+        switch (m) {
+        case Method::kPlane:
+            benchmark::DoNotOptimize(g::polyhedron_contact(p.a, p.b, false));
+            break;
+        case Method::kPlanePatch:
+            benchmark::DoNotOptimize(g::polyhedron_contact(p.a, p.b, true));
+            break;
+        case Method::kEpa:
+            benchmark::DoNotOptimize(g::ccd_contact(p.a, p.b, false));
+            break;
+        case Method::kMpr:
+            benchmark::DoNotOptimize(g::ccd_contact(p.a, p.b, true));
+            break;
+        }
+    }
+    state.counters["edges"] = static_cast<double>(s.edges.size());
+    state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()));
+}
+
+/// Sphere-sphere overlap, normal and contact point (the spherical narrow phase), for comparison.
+void BM_SphereSphere(benchmark::State& state) {
+    std::mt19937_64 rng(1);
+    std::normal_distribution<double> nd;
+    std::vector<Vec3> d;
+    for (int i = 0; i < 256; ++i) {
+        d.push_back(Vec3(nd(rng), nd(rng), nd(rng)).normalized() * 1.99e-3);
+    }
+    const double r = 1e-3;
+    std::size_t i = 0;
+    for (auto _ : state) {
+        const Vec3& x = d[i++ % d.size()];
+        const double dist = x.norm();
+        const Vec3 n = x / dist;
+        const double overlap = 2.0 * r - dist;
+        benchmark::DoNotOptimize(overlap);
+        benchmark::DoNotOptimize(n);
+    }
+    state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()));
+}
+
+/// Mesh wall: a sphere or a cube pressed into a 20 x 20 flat grid of 800 triangles at random spots.
+void run_wall(benchmark::State& state, bool cube) {
+    const int n = 20;
+    const double s = 1e-3;
+    std::vector<Vec3> v;
+    for (int j = 0; j <= n; ++j) {
+        for (int k = 0; k <= n; ++k) {
+            v.emplace_back(k * s, j * s, 0.0);
+        }
+    }
+    std::vector<std::array<int, 3>> t;
+    for (int j = 0; j < n; ++j) {
+        for (int k = 0; k < n; ++k) {
+            const int a = j * (n + 1) + k;
+            t.push_back({a, a + 1, a + n + 2});
+            t.push_back({a, a + n + 2, a + n + 1});
+        }
+    }
+    const g::MeshWall w(v, t, "bench");
+    const g::PolyhedronFeatures& c = shape("cube");
+    std::mt19937_64 rng(1);
+    std::uniform_real_distribution<double> ud(3e-3, 17e-3);
+    std::normal_distribution<double> nd;
+    std::vector<g::PosedPolyhedron> bodies;
+    for (int i = 0; i < 256; ++i) {
+        g::PosedPolyhedron p{&c, Vec3(ud(rng), ud(rng), 0.0),
+                             Quat(nd(rng), nd(rng), nd(rng), nd(rng)).normalized()};
+        p.x.z() = -p.support(-Vec3::UnitZ()).z() - 1e-5;
+        bodies.push_back(p);
+    }
+    std::vector<g::MeshContact> out;
+    std::size_t i = 0;
+    for (auto _ : state) {
+        const g::PosedPolyhedron& p = bodies[i++ % bodies.size()];
+        if (cube) {
+            w.polyhedron_contacts(p, out);
+        } else {
+            w.sphere_contacts(Vec3(p.x.x(), p.x.y(), 0.99e-3), 1e-3, out);
+        }
+        benchmark::DoNotOptimize(out.data());
+    }
+    state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()));
+}
+
+} // namespace
+
+BENCHMARK(BM_SphereSphere);
+BENCHMARK_CAPTURE(run, pyramid_plane, std::string("pyramid"), Method::kPlane);
+BENCHMARK_CAPTURE(run, pyramid_plane_patch, std::string("pyramid"), Method::kPlanePatch);
+BENCHMARK_CAPTURE(run, pyramid_epa, std::string("pyramid"), Method::kEpa);
+BENCHMARK_CAPTURE(run, pyramid_mpr, std::string("pyramid"), Method::kMpr);
+BENCHMARK_CAPTURE(run, cube_plane, std::string("cube"), Method::kPlane);
+BENCHMARK_CAPTURE(run, cube_plane_patch, std::string("cube"), Method::kPlanePatch);
+BENCHMARK_CAPTURE(run, cube_epa, std::string("cube"), Method::kEpa);
+BENCHMARK_CAPTURE(run, cube_mpr, std::string("cube"), Method::kMpr);
+BENCHMARK_CAPTURE(run, plate_plane, std::string("plate_10x9x2"), Method::kPlane);
+BENCHMARK_CAPTURE(run, plate_plane_patch, std::string("plate_10x9x2"), Method::kPlanePatch);
+BENCHMARK_CAPTURE(run, plate_epa, std::string("plate_10x9x2"), Method::kEpa);
+BENCHMARK_CAPTURE(run, cylinder8_plane, std::string("cylinder_8"), Method::kPlane);
+BENCHMARK_CAPTURE(run, cylinder8_plane_patch, std::string("cylinder_8"), Method::kPlanePatch);
+BENCHMARK_CAPTURE(run, cylinder8_epa, std::string("cylinder_8"), Method::kEpa);
+BENCHMARK_CAPTURE(run, cylinder8_mpr, std::string("cylinder_8"), Method::kMpr);
+BENCHMARK_CAPTURE(run, icosahedron_plane, std::string("icosahedron"), Method::kPlane);
+BENCHMARK_CAPTURE(run, icosahedron_plane_patch, std::string("icosahedron"), Method::kPlanePatch);
+BENCHMARK_CAPTURE(run, icosahedron_epa, std::string("icosahedron"), Method::kEpa);
+BENCHMARK_CAPTURE(run, icosahedron_mpr, std::string("icosahedron"), Method::kMpr);
+BENCHMARK_CAPTURE(run, cylinder16_plane, std::string("cylinder_16"), Method::kPlane);
+BENCHMARK_CAPTURE(run, cylinder16_plane_patch, std::string("cylinder_16"), Method::kPlanePatch);
+BENCHMARK_CAPTURE(run, cylinder16_epa, std::string("cylinder_16"), Method::kEpa);
+BENCHMARK_CAPTURE(run, cylinder16_mpr, std::string("cylinder_16"), Method::kMpr);
+BENCHMARK_CAPTURE(run_wall, sphere_on_mesh, false);
+BENCHMARK_CAPTURE(run_wall, cube_on_mesh, true);

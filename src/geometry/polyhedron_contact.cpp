@@ -1,0 +1,370 @@
+// Fast common plane between convex polyhedra, contact points and patch (see the header).
+
+#include "geometry/polyhedron_contact.hpp"
+
+#include "core/error.hpp"
+#include "geometry/convex_polygon.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numeric>
+
+namespace kiln::geometry {
+
+Vec3 PolyhedronFeatures::support(const Vec3& d_body) const {
+    KILN_ASSERT(!vertices.empty());
+    std::size_t best = 0;
+    double best_dot = vertices[0].dot(d_body);
+    for (std::size_t i = 1; i < vertices.size(); ++i) {
+        const double s = vertices[i].dot(d_body);
+        if (s > best_dot) {
+            best_dot = s;
+            best = i;
+        }
+    }
+    return vertices[best];
+}
+
+namespace {
+
+/// Largest angle (rad) between the normals of two adjacent triangles counted as one plane.
+constexpr double kCoplanarAngle = 1e-9;
+
+int find_root(std::vector<int>& parent, int i) {
+    while (parent[static_cast<std::size_t>(i)] != i) {
+        parent[static_cast<std::size_t>(i)] =
+            parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
+        i = parent[static_cast<std::size_t>(i)];
+    }
+    return i;
+}
+
+} // namespace
+
+PolyhedronFeatures polyhedron_features(const ConvexPolyhedron& p) {
+    PolyhedronFeatures f;
+    f.vertices = p.vertices;
+    f.radius = p.bounding_radius();
+    const std::size_t nt = p.faces.size();
+    std::vector<Vec3> area(nt);
+    std::map<std::array<int, 2>, int> tri_of; // directed edge -> triangle
+    for (std::size_t t = 0; t < nt; ++t) {
+        const auto& tri = p.faces[t];
+        const Vec3& a = p.vertices[static_cast<std::size_t>(tri[0])];
+        area[t] = (p.vertices[static_cast<std::size_t>(tri[1])] - a)
+                      .cross(p.vertices[static_cast<std::size_t>(tri[2])] - a);
+        for (std::size_t k = 0; k < 3; ++k) {
+            tri_of[{tri[k], tri[(k + 1) % 3]}] = static_cast<int>(t);
+        }
+    }
+    // Merge adjacent triangles of one plane (union-find over shared edges).
+    std::vector<int> parent(nt);
+    std::iota(parent.begin(), parent.end(), 0);
+    for (const auto& [e, t] : tri_of) {
+        const auto it = tri_of.find({e[1], e[0]});
+        if (it == tri_of.end()) {
+            continue;
+        }
+        const Vec3 n0 = area[static_cast<std::size_t>(t)].normalized();
+        const Vec3 n1 = area[static_cast<std::size_t>(it->second)].normalized();
+        if (n0.dot(n1) > 0.0 && n0.cross(n1).norm() < kCoplanarAngle) {
+            parent[static_cast<std::size_t>(find_root(parent, t))] = find_root(parent, it->second);
+        }
+    }
+    std::vector<int> face_of(nt, -1);
+    std::vector<Vec3> sum;
+    for (std::size_t t = 0; t < nt; ++t) {
+        const auto r = static_cast<std::size_t>(find_root(parent, static_cast<int>(t)));
+        if (face_of[r] < 0) {
+            face_of[r] = static_cast<int>(sum.size());
+            sum.emplace_back(Vec3::Zero());
+        }
+        face_of[t] = face_of[r];
+        sum[static_cast<std::size_t>(face_of[t])] += area[t];
+    }
+    f.face_normals.resize(sum.size());
+    f.face_offsets.assign(sum.size(), -std::numeric_limits<double>::infinity());
+    for (std::size_t g = 0; g < sum.size(); ++g) {
+        f.face_normals[g] = sum[g].normalized();
+    }
+    for (std::size_t t = 0; t < nt; ++t) {
+        const auto g = static_cast<std::size_t>(face_of[t]);
+        for (const int v : p.faces[t]) {
+            f.face_offsets[g] = std::max(
+                f.face_offsets[g], f.face_normals[g].dot(p.vertices[static_cast<std::size_t>(v)]));
+        }
+    }
+    for (const auto& e : p.edges) {
+        const auto t0 = tri_of.find({e[0], e[1]});
+        const auto t1 = tri_of.find({e[1], e[0]});
+        if (t0 == tri_of.end() || t1 == tri_of.end()) {
+            continue;
+        }
+        const int g0 = face_of[static_cast<std::size_t>(t0->second)];
+        const int g1 = face_of[static_cast<std::size_t>(t1->second)];
+        if (g0 != g1) {
+            f.edges.push_back({e[0], e[1], g0, g1});
+        }
+    }
+    return f;
+}
+
+namespace {
+
+using detail::clip_convex;
+using detail::clip_edge;
+using detail::hull_2d;
+using detail::section;
+using detail::Vec2;
+
+/// B expressed in A's body frame: vertices and face planes.
+struct Relative {
+    Mat3 rot;               // B body -> A body
+    Vec3 shift;             // B's centre in A's frame (m)
+    std::vector<Vec3> vb;   // B's vertices in A's frame (m)
+    std::vector<Vec3> nb;   // B's face normals in A's frame
+    std::vector<double> ob; // B's face offsets in A's frame (m)
+    // Per feature edge of B, in A's frame: the negated normals c, d of its two faces and d x c,
+    // the Gauss-map arc of the edge of -B.
+    std::vector<std::array<Vec3, 3>> arcs;
+};
+
+void make_relative(const PosedPolyhedron& a, const PosedPolyhedron& b, Relative& r) {
+    const Quat qab = a.q.conjugate() * b.q;
+    r.rot = qab.toRotationMatrix();
+    r.shift = a.q.conjugate() * (b.x - a.x);
+    const PolyhedronFeatures& fb = *b.shape;
+    r.vb.resize(fb.vertices.size());
+    for (std::size_t j = 0; j < fb.vertices.size(); ++j) {
+        r.vb[j] = r.rot * fb.vertices[j] + r.shift;
+    }
+    r.nb.resize(fb.face_normals.size());
+    r.ob.resize(fb.face_normals.size());
+    for (std::size_t k = 0; k < fb.face_normals.size(); ++k) {
+        r.nb[k] = r.rot * fb.face_normals[k];
+        r.ob[k] = fb.face_offsets[k] + r.nb[k].dot(r.shift);
+    }
+    r.arcs.resize(fb.edges.size());
+    for (std::size_t k = 0; k < fb.edges.size(); ++k) {
+        const Vec3 c = -r.nb[static_cast<std::size_t>(fb.edges[k][2])];
+        const Vec3 d = -r.nb[static_cast<std::size_t>(fb.edges[k][3])];
+        r.arcs[k] = {c, d, d.cross(c)};
+    }
+}
+
+double min_dot(const std::vector<Vec3>& pts, const Vec3& n) {
+    double m = std::numeric_limits<double>::infinity();
+    for (const Vec3& p : pts) {
+        m = std::min(m, n.dot(p));
+    }
+    return m;
+}
+
+double max_dot(const std::vector<Vec3>& pts, const Vec3& n) {
+    double m = -std::numeric_limits<double>::infinity();
+    for (const Vec3& p : pts) {
+        m = std::max(m, n.dot(p));
+    }
+    return m;
+}
+
+/// Gauss-map test of Gregorius (2013): do the arcs (a, b) of A's edge and (c, d) of B's negated
+/// edge cross, i.e. does the edge pair span a face of the Minkowski difference?
+bool is_minkowski_face(const Vec3& a, const Vec3& b, const Vec3& bxa, const Vec3& c, const Vec3& d,
+                       const Vec3& dxc) {
+    const double cba = c.dot(bxa);
+    const double dba = d.dot(bxa);
+    const double adc = a.dot(dxc);
+    const double bdc = b.dot(dxc);
+    return cba * dba < 0.0 && adc * bdc < 0.0 && cba * bdc > 0.0;
+}
+
+/// Appends p to pts unless a point within tol is already there.
+void add_unique(std::vector<Vec3>& pts, const Vec3& p, double tol2) {
+    for (const Vec3& q : pts) {
+        if ((q - p).squaredNorm() <= tol2) {
+            return;
+        }
+    }
+    pts.push_back(p);
+}
+
+/// Points and patch for the normal m (unit, from B to A), all in A's body frame; the result's
+/// vectors are converted to the world frame of A at the end.
+PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b, const Relative& r,
+                             const Vec3& m) {
+    const PolyhedronFeatures& fa = *a.shape;
+    const PolyhedronFeatures& fb = *b.shape;
+    const double scale = fa.radius + fb.radius;
+    PolyhedronContact c;
+    const double d_a = min_dot(fa.vertices, m);
+    const double d_b = max_dot(r.vb, m);
+    c.depth = d_b - d_a;
+    c.touching = c.depth > 0.0;
+    const double s = 0.5 * (d_a + d_b);
+    const Vec3 u = m.unitOrthogonal();
+    const Vec3 v = m.cross(u);
+
+    // Vertices of A n B: edges of each body clipped by the other's face planes.
+    std::vector<Vec3> raw;
+    for (const auto& e : fa.edges) {
+        clip_edge(fa.vertices[static_cast<std::size_t>(e[0])],
+                  fa.vertices[static_cast<std::size_t>(e[1])], r.nb, r.ob, raw);
+    }
+    for (const auto& e : fb.edges) {
+        clip_edge(r.vb[static_cast<std::size_t>(e[0])], r.vb[static_cast<std::size_t>(e[1])],
+                  fa.face_normals, fa.face_offsets, raw);
+    }
+    const double tol2 = 1e-24 * scale * scale;
+    std::vector<Vec3> pts;
+    for (const Vec3& p : raw) {
+        add_unique(pts, p, tol2);
+    }
+
+    // Patch: section of A by the CP clipped by the section of B.
+    const double area_tol = 1e-24 * scale * scale;
+    const std::vector<Vec2> sa = hull_2d(section(fa.vertices, fa.edges, m, s, u, v), area_tol);
+    const std::vector<Vec2> sb = hull_2d(section(r.vb, fb.edges, m, s, u, v), area_tol);
+    std::vector<Vec2> poly;
+    if (sa.size() >= 3 && sb.size() >= 3) {
+        poly = clip_convex(sa, sb);
+    }
+    double area2 = 0.0;
+    Vec2 moment = Vec2::Zero();
+    detail::accumulate_polygon(poly, area2, moment);
+    Vec3 point_a;
+    if (area2 > 2.0 * area_tol) {
+        const Vec2 cen = moment / (3.0 * area2);
+        point_a = s * m + cen.x() * u + cen.y() * v;
+        c.patch_area = 0.5 * area2;
+    } else if (!pts.empty()) {
+        Vec3 mean = Vec3::Zero();
+        for (const Vec3& p : pts) {
+            mean += p;
+        }
+        mean /= static_cast<double>(pts.size());
+        point_a = mean + (s - m.dot(mean)) * m;
+    } else {
+        // No points (touching at a vertex or edge to round-off): midpoint of the deepest points.
+        point_a =
+            0.5 * (fa.support(-m) + (r.rot * b.shape->support(r.rot.transpose() * m) + r.shift));
+    }
+    c.normal = a.q * m;
+    c.point = a.x + a.q * point_a;
+    c.points.reserve(pts.size());
+    for (const Vec3& p : pts) {
+        c.points.emplace_back(a.x + a.q * p);
+    }
+    if (area2 > 2.0 * area_tol) {
+        c.patch.reserve(poly.size());
+        for (const Vec2& p : poly) {
+            c.patch.emplace_back(a.x + a.q * (s * m + p.x() * u + p.y() * v));
+        }
+    }
+    return c;
+}
+
+} // namespace
+
+PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b,
+                                     bool with_patch) {
+    PolyhedronContact c;
+    const PolyhedronFeatures& fa = *a.shape;
+    const PolyhedronFeatures& fb = *b.shape;
+    const double dist = (b.x - a.x).norm();
+    if (!std::isfinite(dist) || !std::isfinite(a.q.norm()) || !std::isfinite(b.q.norm())) {
+        c.converged = false;
+        return c;
+    }
+    if (dist > fa.radius + fb.radius) {
+        c.depth = fa.radius + fb.radius - dist;
+        return c;
+    }
+    thread_local Relative r;
+    make_relative(a, b, r);
+
+    // Largest separation (smallest overlap) over the candidate planes, in A's frame. m is the
+    // normal from B to A.
+    double best = -std::numeric_limits<double>::infinity();
+    Vec3 best_m = Vec3::UnitX();
+    for (std::size_t k = 0; k < fa.face_normals.size(); ++k) {
+        const Vec3& n = fa.face_normals[k];
+        const double sep = min_dot(r.vb, n) - fa.face_offsets[k];
+        ++c.iterations;
+        if (sep > best) {
+            best = sep;
+            best_m = -n;
+            c.feature = CommonPlaneFeature::kFaceOfA;
+        }
+    }
+    for (std::size_t k = 0; k < r.nb.size() && best <= 0.0; ++k) {
+        const double sep = min_dot(fa.vertices, r.nb[k]) - r.ob[k];
+        ++c.iterations;
+        if (sep > best) {
+            best = sep;
+            best_m = r.nb[k];
+            c.feature = CommonPlaneFeature::kFaceOfB;
+        }
+    }
+    if (best <= 0.0) {
+        for (const auto& ea : fa.edges) {
+            const Vec3& na0 = fa.face_normals[static_cast<std::size_t>(ea[2])];
+            const Vec3& na1 = fa.face_normals[static_cast<std::size_t>(ea[3])];
+            const Vec3 bxa = na1.cross(na0);
+            const Vec3& pa = fa.vertices[static_cast<std::size_t>(ea[0])];
+            const Vec3 da = fa.vertices[static_cast<std::size_t>(ea[1])] - pa;
+            for (std::size_t k = 0; k < fb.edges.size(); ++k) {
+                const auto& arc = r.arcs[k];
+                if (!is_minkowski_face(na0, na1, bxa, arc[0], arc[1], arc[2])) {
+                    continue;
+                }
+                const auto& eb = fb.edges[k];
+                ++c.iterations;
+                const Vec3& pb = r.vb[static_cast<std::size_t>(eb[0])];
+                const Vec3 db = r.vb[static_cast<std::size_t>(eb[1])] - pb;
+                Vec3 n = da.cross(db);
+                const double len = n.norm();
+                if (len <= 1e-12 * da.norm() * db.norm()) {
+                    continue; // parallel edges: covered by the face planes
+                }
+                n /= len;
+                if (n.dot(pa) < 0.0) {
+                    n = -n; // outward from A (A's centre is the origin)
+                }
+                const double sep = n.dot(pb - pa);
+                if (sep > best) {
+                    best = sep;
+                    best_m = -n;
+                    c.feature = CommonPlaneFeature::kEdgeEdge;
+                }
+            }
+        }
+    }
+    if (best > 0.0) {
+        c.depth = -best;
+        c.normal = a.q * best_m;
+        return c;
+    }
+    if (!with_patch) {
+        c.touching = true;
+        c.depth = -best;
+        c.normal = a.q * best_m;
+        c.point = 0.5 * (a.support(-c.normal) + b.support(c.normal));
+        return c;
+    }
+    PolyhedronContact p = patch_in_a(a, b, r, best_m);
+    p.feature = c.feature;
+    p.iterations = c.iterations;
+    return p;
+}
+
+PolyhedronContact contact_patch_along(const PosedPolyhedron& a, const PosedPolyhedron& b,
+                                      const Vec3& m) {
+    thread_local Relative r;
+    make_relative(a, b, r);
+    return patch_in_a(a, b, r, a.q.conjugate() * m.normalized());
+}
+
+} // namespace kiln::geometry

@@ -1,0 +1,108 @@
+#pragma once
+// Contact between two convex polyhedra by the common-plane method (Cundall 1988, Int. J. Rock
+// Mech. 25, 107) in the fast form of Nezami et al. (2004, Int. J. Numer. Anal. Meth. Geomech. 28,
+// 783; 2006, Comput. Geotech. 33, 145), as used by the seed (Hoehner 2014 via Oschmann 2019,
+// Sec. 3.3.2; notes/seed001_shape.md Sec. 4.3).
+//
+// The common plane (CP) with normal m (from B to A) and the vertex distances d_A = min over A of
+// m.x, d_B = max over B of m.x has the gap d_A - d_B; the CP is the plane of largest gap (Cundall's
+// condition 3), and the overlap is -gap = h_A(-m) + h_B(m) with h the support function. Nezami's
+// fast CP evaluates only the candidate orientations that can be optimal: planes parallel to a face
+// of A or of B and planes parallel to one edge of A and one edge of B. For convex polyhedra the
+// best of these is the exact optimum (the faces of the Minkowski difference A - B have exactly
+// these normals; an edge pair counts only if its Gauss-map arcs cross, Gregorius 2013, GDC talk
+// "The separating axis test between convex polyhedra"), so no iteration is needed and the overlap
+// equals the minimum translation distance that EPA approximates. Hoehner's first FCP step
+// (separating the particles before the search) is not done, as in the seed (L462).
+//
+// Multi-point contact and patch: the contact points are the vertices of the intersection A n B
+// (vertices of each body inside the other and intersections of the edges of each body with the
+// faces of the other, found by clipping every edge against the other body's face planes). The
+// patch is the section of A n B by the common plane, placed half way between d_A and d_B: the
+// intersection of the two convex polygons in which the CP cuts A and B. The contact point is the
+// patch centroid, so it moves continuously when a contact turns from an edge into a face (see
+// docs/theory/shapes.md, "Common plane").
+//
+// Conventions as in convex_contact.hpp: the normal points from B to A, world frame; failures are
+// reported in the result, never thrown.
+
+#include "core/types.hpp"
+#include "geometry/convex_contact.hpp"
+#include "geometry/polyhedron.hpp"
+
+#include <array>
+#include <vector>
+
+namespace kiln::geometry {
+
+/// Contact features of a convex polyhedron (body frame): planar faces with coplanar triangles
+/// merged, and the edges between faces of different planes (the triangles' diagonals dropped).
+struct PolyhedronFeatures {
+    std::vector<Vec3> vertices;            ///< vertex positions (m), body frame
+    std::vector<Vec3> face_normals;        ///< outward unit normal of each planar face, body frame
+    std::vector<double> face_offsets;      ///< n . x on each face plane (m), body frame
+    std::vector<std::array<int, 4>> edges; ///< feature edges: vertices v0, v1, faces f0, f1
+    double radius = 0.0;                   ///< distance of the farthest vertex from the origin (m)
+
+    /// Support point (m, body frame): the vertex maximising d . x for a body-frame direction d.
+    [[nodiscard]] Vec3 support(const Vec3& d_body) const;
+};
+
+/// Features of a polyhedron (faces whose normals differ by less than 1e-9 rad are merged).
+[[nodiscard]] PolyhedronFeatures polyhedron_features(const ConvexPolyhedron& p);
+
+/// A polyhedron placed in the world: centre of mass x (m) and orientation q (body -> world).
+struct PosedPolyhedron {
+    const PolyhedronFeatures* shape = nullptr; ///< geometry, body frame
+    Vec3 x = Vec3::Zero();                     ///< centre of mass (m), world frame
+    Quat q = Quat::Identity();                 ///< orientation, body -> world
+
+    /// Support point (m, world frame) for a world-frame direction d.
+    [[nodiscard]] Vec3 support(const Vec3& d_world) const {
+        return x + q * shape->support(q.conjugate() * d_world);
+    }
+    /// Length scale for relative tolerances: the bounding radius (m).
+    [[nodiscard]] double length_scale() const { return shape->radius; }
+};
+
+/// Which candidate plane of the fast common plane won.
+enum class CommonPlaneFeature {
+    kNone,     ///< no candidate (bounding spheres apart)
+    kFaceOfA,  ///< plane parallel to a face of A
+    kFaceOfB,  ///< plane parallel to a face of B
+    kEdgeEdge, ///< plane parallel to an edge of A and an edge of B
+};
+
+/// Result of a polyhedron contact query. Failures are reported, never thrown.
+struct PolyhedronContact {
+    bool touching = false;       ///< bodies overlap (depth > 0)
+    bool converged = true;       ///< false: degenerate input (e.g. non-finite pose)
+    double depth = 0.0;          ///< overlap (m); when apart: minus a lower bound of the gap
+    Vec3 normal = Vec3::UnitX(); ///< unit common-plane normal from B towards A, world frame
+    Vec3 point = Vec3::Zero();   ///< contact point (m), world frame: centroid of the patch (or of
+                                 ///< the points when the patch is degenerate), on the CP
+    std::vector<Vec3> points;    ///< vertices of A n B (m), world frame
+    std::vector<Vec3> patch;     ///< patch polygon on the CP (m), world frame, counter-clockwise
+                                 ///< seen from A (about `normal`)
+    double patch_area = 0.0;     ///< area of the patch (m^2)
+    CommonPlaneFeature feature = CommonPlaneFeature::kNone; ///< winning candidate
+    int iterations = 0; ///< candidate planes evaluated (faces plus edge pairs passing the test)
+};
+
+/// Overlap, common-plane normal, contact points and patch of two posed polyhedra (fast common
+/// plane). `with_patch = false` skips the points and the patch (point = midpoint of the deepest
+/// points of A and B along the normal).
+[[nodiscard]] PolyhedronContact
+polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b, bool with_patch = true);
+
+/// Points and patch for a given normal m (unit, from B to A, world frame), as polyhedron_contact
+/// computes them after finding its plane; fills depth (h_A(-m) + h_B(m)), normal, point, points,
+/// patch and patch_area. Gives a patch to a normal found otherwise (e.g. by EPA).
+[[nodiscard]] PolyhedronContact contact_patch_along(const PosedPolyhedron& a,
+                                                    const PosedPolyhedron& b, const Vec3& m);
+
+/// libccd adapter (ccd_adapter.cpp): GJK + EPA (use_mpr = false) or MPR on the support maps.
+[[nodiscard]] ConvexContact ccd_contact(const PosedPolyhedron& a, const PosedPolyhedron& b,
+                                        bool use_mpr);
+
+} // namespace kiln::geometry
