@@ -204,7 +204,8 @@ TEST(Bodies, MixedPourGivesTheSameBitsForOneAndTwoThreads) {
 }
 
 TEST(Bodies, PolyhedraNextToSuperquadricsAreNotYetSupported) {
-    // Polyhedra run (tests/dynamics/test_polyhedra.cpp); their pair with a superquadric is not wired.
+    // Polyhedra run (tests/dynamics/test_polyhedra.cpp); their pair with a superquadric is not
+    // wired.
     SceneSpec s = base_scene();
     s.shapes.push_back(shape("cube"));
     s.shapes.push_back(shape("ellipsoid_123"));

@@ -284,9 +284,9 @@ TEST(CaseReader, ShapeErrorsAreLocated) {
               std::string::npos);
     // Polyhedra run, but not next to superquadrics.
     EXPECT_EQ(error_of(body("shape = \"cube\"\n")), "");
-    const std::string mixed = error_of(body("shape = \"cube\"\n") +
-                                       "\n[[particle]]\nmaterial = \"glass\"\n"
-                                       "position = [0.01, 0.01, 0.015]\nshape = \"ellipsoid_123\"\n");
+    const std::string mixed = error_of(
+        body("shape = \"cube\"\n") + "\n[[particle]]\nmaterial = \"glass\"\n"
+                                     "position = [0.01, 0.01, 0.015]\nshape = \"ellipsoid_123\"\n");
     EXPECT_NE(mixed.find("polyhedra and superquadrics in one case are not yet supported"),
               std::string::npos)
         << mixed;
@@ -344,7 +344,8 @@ TEST(CaseReader, MeshWallReadsRelativeToTheCaseFile) {
     const auto& mesh = *c.scene.mesh_walls[0].mesh;
     EXPECT_EQ(mesh.triangles().size(), 2U);
     EXPECT_DOUBLE_EQ(mesh.vertices()[0].z(), 0.001);
-    // The closed box flipped into a container, scaled to a 40 mm cube around the insert region: the particles are inside.
+    // The closed box flipped into a container, scaled to a 40 mm cube around the insert region: the
+    // particles are inside.
     const CaseSpec box = read_case_text(
         with_mesh("file = \"box.obj\"\nscale = 0.04\ntranslate = [-0.01, -0.01, 0]\nflip = true\n"),
         folder.path());
@@ -366,8 +367,9 @@ TEST(CaseReader, MeshWallErrorsAreLocated) {
     const std::string sliver = error_of_file(with_mesh("file = \"sliver.obj\"\n"), folder.path());
     EXPECT_NE(sliver.find("wall[0].file"), std::string::npos) << sliver;
     // Wrong side: the box with outward normals and the particles inside it.
-    const std::string side =
-        error_of_file(with_mesh("file = \"box.obj\"\nscale = 0.04\ntranslate = [-0.01, -0.01, 0]\n"), folder.path());
+    const std::string side = error_of_file(
+        with_mesh("file = \"box.obj\"\nscale = 0.04\ntranslate = [-0.01, -0.01, 0]\n"),
+        folder.path());
     EXPECT_NE(side.find("wall[0].flip"), std::string::npos) << side;
     EXPECT_NE(side.find("behind the mesh"), std::string::npos) << side;
     // Scale must be positive.
