@@ -464,6 +464,8 @@ void read_mesh_wall(Section& s, CaseSpec& c, const std::string& name, int mat,
     } catch (const InputError& e) {
         s.fail_at("file", e.what());
     }
+    // The resolved case names the file absolutely, so that it reads again from the output folder.
+    s.out().insert_or_assign("file", std::filesystem::absolute(path).lexically_normal().string());
     sites.push_back({s.line_of("file"), s.full("flip")});
 }
 

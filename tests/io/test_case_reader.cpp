@@ -351,6 +351,9 @@ TEST(CaseReader, MeshWallReadsRelativeToTheCaseFile) {
         folder.path());
     EXPECT_EQ(box.scene.mesh_walls[0].mesh->facet_count(), 6);
     EXPECT_NE(box.resolved_toml.find("flip = true"), std::string::npos);
+    // The resolved text names the mesh absolutely and reads again from anywhere.
+    const CaseSpec again = read_case_text(box.resolved_toml, "elsewhere/resolved.toml");
+    EXPECT_EQ(again.scene.mesh_walls.size(), 1U);
 }
 
 TEST(CaseReader, MeshWallErrorsAreLocated) {
