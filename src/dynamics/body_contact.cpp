@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
+#include <stdexcept>
 #include <type_traits>
 
 namespace kiln::dynamics {
@@ -69,10 +71,235 @@ ElementContact sphere_sphere(const Element& a, const Element& b) {
     return c;
 }
 
+/// Closest point of triangle (a, b, c) to p (Ericson 2005, Real-Time Collision Detection,
+/// Sec. 5.1.5; any frame).
+Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+    const Vec3 ab = b - a;
+    const Vec3 ac = c - a;
+    const Vec3 ap = p - a;
+    const double d1 = ab.dot(ap);
+    const double d2 = ac.dot(ap);
+    if (d1 <= 0.0 && d2 <= 0.0) {
+        return a;
+    }
+    const Vec3 bp = p - b;
+    const double d3 = ab.dot(bp);
+    const double d4 = ac.dot(bp);
+    if (d3 >= 0.0 && d4 <= d3) {
+        return b;
+    }
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+        return a + d1 / (d1 - d3) * ab;
+    }
+    const Vec3 cp = p - c;
+    const double d5 = ab.dot(cp);
+    const double d6 = ac.dot(cp);
+    if (d6 >= 0.0 && d5 <= d6) {
+        return c;
+    }
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+        return a + d2 / (d2 - d6) * ac;
+    }
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+        return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+    }
+    const double denom = 1.0 / (va + vb + vc);
+    return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+/// Sphere element s against polyhedron element p, exact: the closest point of p's surface to the
+/// sphere centre (centre outside), or the nearest face plane (centre inside). Normal from p to s.
+/// The polyhedron counts as flat at the contact, so R* is the sphere radius.
+ElementContact sphere_polyhedron(const Element& s, const Element& p) {
+    ElementContact out;
+    const geometry::PolyhedronFeatures& f = *p.poly;
+    const Vec3 c = p.q.conjugate() * (s.centre - p.centre); // sphere centre, body frame of p
+    double smax = -std::numeric_limits<double>::infinity();
+    std::size_t fmax = 0;
+    for (std::size_t k = 0; k < f.face_normals.size(); ++k) {
+        const double d = f.face_normals[k].dot(c) - f.face_offsets[k];
+        if (d > smax) {
+            smax = d;
+            fmax = k;
+        }
+    }
+    if (smax >= s.radius) {
+        return out; // a face plane separates them
+    }
+    Vec3 n_body = Vec3::UnitZ();
+    Vec3 surface = c;
+    double dist = 0.0;
+    if (smax <= 0.0) {
+        n_body = f.face_normals[fmax];
+        surface = c - smax * n_body;
+        dist = smax;
+    } else {
+        double best = std::numeric_limits<double>::infinity();
+        const auto& v = p.hull->vertices;
+        for (const auto& t : p.hull->faces) {
+            const Vec3 q = closest_on_triangle(c, v[static_cast<std::size_t>(t[0])],
+                                               v[static_cast<std::size_t>(t[1])],
+                                               v[static_cast<std::size_t>(t[2])]);
+            const double d2 = (c - q).squaredNorm();
+            if (d2 < best) {
+                best = d2;
+                surface = q;
+            }
+        }
+        dist = std::sqrt(best);
+        if (dist >= s.radius || dist <= 0.0) {
+            return out;
+        }
+        n_body = (c - surface) / dist;
+    }
+    out.touching = true;
+    out.overlap = s.radius - dist;
+    out.normal = p.q * n_body;
+    const Vec3 surface_w = p.centre + p.q * surface;
+    out.point = 0.5 * (surface_w + s.centre - s.radius * out.normal);
+    out.r_eff = s.radius;
+    return out;
+}
+
+/// Hertz radius of two polyhedra: the volume-equivalent spheres in series.
+double polyhedron_pair_radius(const Element& a, const Element& b) {
+    return a.r_equiv * b.r_equiv / (a.r_equiv + b.r_equiv);
+}
+
+/// Two polyhedron elements: fast common plane (default) or libccd GJK/EPA with the common-plane
+/// patch along EPA's normal. Normal from b to a; point = patch centroid.
+ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase method) {
+    ElementContact out;
+    const geometry::PosedPolyhedron pa{a.poly, a.centre, a.q};
+    const geometry::PosedPolyhedron pb{b.poly, b.centre, b.q};
+    // Separating-axis shortcut along the line of centres (two support evaluations).
+    const Vec3 line = a.centre - b.centre;
+    if (line.squaredNorm() > 0.0) {
+        const Vec3 m = line.normalized();
+        if (m.dot(pb.support(m)) - m.dot(pa.support(-m)) < 0.0) {
+            return out;
+        }
+    }
+    geometry::PolyhedronContact pc;
+    if (method == NarrowPhase::gjk_epa) {
+        const geometry::ConvexContact cc = geometry::ccd_contact(pa, pb, false);
+        out.converged = cc.converged;
+        if (!cc.converged || !cc.touching) {
+            return out;
+        }
+        pc = geometry::contact_patch_along(pa, pb, cc.normal);
+    } else {
+        pc = geometry::polyhedron_contact(pa, pb, true);
+        out.converged = pc.converged;
+        if (!pc.converged || !pc.touching) {
+            return out;
+        }
+    }
+    if (!(pc.depth > 0.0)) {
+        return out;
+    }
+    out.touching = true;
+    out.overlap = pc.depth;
+    out.normal = pc.normal;
+    out.point = pc.point;
+    out.r_eff = polyhedron_pair_radius(a, b);
+    return out;
+}
+
+/// Depth band, as a fraction of the overlap, within which vertices share the contact point.
+constexpr double kTieBand = 0.02;
+
+/// Contact point of a polyhedron on a wall: the deepest vertex, or, when several vertices are
+/// almost equally deep (a face or an edge lying on the wall), their average weighted by
+/// w = 1 - (depth_max - depth) / (kTieBand depth_max), which falls continuously to 0. The deepest
+/// vertex is where the gradient of the overlap acts (Danskin), so the normal force is conservative
+/// except within the band; the weighted average keeps a face at rest centred. `depth(x)` is the
+/// depth of a world point below the wall (m); the point is moved half the overlap back out.
+template <class Depth>
+Vec3 wall_point(const geometry::PosedPolyhedron& p, double overlap, const Vec3& n, Depth depth) {
+    const geometry::PolyhedronFeatures& f = *p.shape;
+    const double band = kTieBand * overlap;
+    Vec3 sum = Vec3::Zero();
+    double wsum = 0.0;
+    for (const Vec3& v : f.vertices) {
+        const Vec3 x = p.x + p.q * v;
+        const double w = 1.0 - (overlap - depth(x)) / band;
+        if (w > 0.0) {
+            sum += w * x;
+            wsum += w;
+        }
+    }
+    return (wsum > 0.0 ? Vec3(sum / wsum) : p.x) + 0.5 * overlap * n;
+}
+
+/// Polyhedron element against an analytic wall. Plane: the deepest vertex gives the overlap.
+/// Cylinder: the support along the outward radial direction, as for superquadrics. The point:
+/// wall_point.
+ElementContact polyhedron_wall(const Element& a, const WallShape& w) {
+    ElementContact out;
+    const geometry::PosedPolyhedron p{a.poly, a.centre, a.q};
+    Vec3 deepest = a.centre;
+    std::visit(
+        [&](const auto& s) {
+            using S = std::decay_t<decltype(s)>;
+            if constexpr (std::is_same_v<S, PlaneWall>) {
+                deepest = p.support(-s.normal);
+                out.overlap = -(deepest - s.point).dot(s.normal);
+                out.normal = s.normal;
+            } else {
+                Vec3 rho = a.centre - s.axis_point;
+                rho -= rho.dot(s.axis) * s.axis;
+                const Vec3 dir = rho.norm() > 1e-12 * a.radius ? Vec3(rho.normalized())
+                                                               : Vec3(s.axis.unitOrthogonal());
+                deepest = p.support(dir);
+                Vec3 rp = deepest - s.axis_point;
+                rp -= rp.dot(s.axis) * s.axis;
+                const double dist = rp.norm();
+                out.overlap = dist - s.radius;
+                out.normal = dist > 0.0 ? Vec3(-rp / dist) : Vec3(-dir);
+            }
+        },
+        w);
+    if (!(out.overlap > 0.0)) {
+        out.overlap = 0.0;
+        return out;
+    }
+    out.touching = true;
+    std::visit(
+        [&](const auto& s) {
+            using S = std::decay_t<decltype(s)>;
+            if constexpr (std::is_same_v<S, PlaneWall>) {
+                out.point = wall_point(p, out.overlap, out.normal,
+                                       [&](const Vec3& x) { return -(x - s.point).dot(s.normal); });
+            } else {
+                out.point = wall_point(p, out.overlap, out.normal, [&](const Vec3& x) {
+                    Vec3 rp = x - s.axis_point;
+                    rp -= rp.dot(s.axis) * s.axis;
+                    return rp.norm() - s.radius;
+                });
+            }
+        },
+        w);
+    out.r_eff = a.r_equiv;
+    return out;
+}
+
 } // namespace
+
+double equivalent_radius(const geometry::ShapeTemplate& t) {
+    return std::cbrt(3.0 * t.volume / (4.0 * std::numbers::pi));
+}
 
 void append_elements(const geometry::ShapeTemplate* t, const Vec3& x, const Quat& q, double r,
                      std::vector<Element>& out) {
+    append_elements(t, nullptr, x, q, r, out);
+}
+
+void append_elements(const geometry::ShapeTemplate* t, const geometry::PolyhedronFeatures* features,
+                     const Vec3& x, const Quat& q, double r, std::vector<Element>& out) {
     if (t == nullptr) {
         out.push_back({Element::Kind::sphere, x, r, nullptr, Quat::Identity(), r});
         return;
@@ -92,8 +319,19 @@ void append_elements(const geometry::ShapeTemplate* t, const Vec3& x, const Quat
         out.push_back({Element::Kind::sphere, x, s->radius, nullptr, Quat::Identity(), s->radius});
         return;
     }
-    // Polyhedra are refused when the scene is built (System); reaching here is a programming error.
-    out.push_back({Element::Kind::sphere, x, r, nullptr, Quat::Identity(), r});
+    const auto& hull = std::get<geometry::ConvexPolyhedron>(t->shape);
+    if (features == nullptr) {
+        throw std::logic_error("append_elements: polyhedron template without its features");
+    }
+    double inradius = std::numeric_limits<double>::infinity();
+    for (const double o : features->face_offsets) {
+        inradius = std::min(inradius, o);
+    }
+    Element e{Element::Kind::polyhedron, x, r, nullptr, q, inradius};
+    e.poly = features;
+    e.hull = &hull;
+    e.r_equiv = equivalent_radius(*t);
+    out.push_back(e);
 }
 
 ElementContact element_contact(const Element& a, const Element& b, NarrowPhase method,
@@ -105,6 +343,25 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
     }
     if (a.kind == Element::Kind::sphere && b.kind == Element::Kind::sphere) {
         return sphere_sphere(a, b);
+    }
+    const bool poly_a = a.kind == Element::Kind::polyhedron;
+    const bool poly_b = b.kind == Element::Kind::polyhedron;
+    if (poly_a && poly_b) {
+        return polyhedron_pair(a, b, method);
+    }
+    if (poly_b && a.kind == Element::Kind::sphere) {
+        return sphere_polyhedron(a, b);
+    }
+    if (poly_a && b.kind == Element::Kind::sphere) {
+        ElementContact c = sphere_polyhedron(b, a);
+        c.normal = -c.normal;
+        return c;
+    }
+    if (poly_a || poly_b) {
+        // Polyhedron-superquadric: refused when the scene is built (System::add_body).
+        ElementContact c;
+        c.converged = false;
+        return c;
     }
     const SphereAsSuperquadric sa(a.radius);
     const SphereAsSuperquadric sb(b.radius);
@@ -185,6 +442,9 @@ ElementContact element_wall_contact(const Element& a, const WallShape& w) {
             out.r_eff = g.r_eff;
         }
         return out;
+    }
+    if (a.kind == Element::Kind::polyhedron) {
+        return polyhedron_wall(a, w);
     }
     // Convex element: the deepest point is the support point against the wall normal (plane), or
     // along the outward radial direction of the centre (cylinder; exact in the limit of a wall

@@ -2,8 +2,10 @@
 // Contact geometry of non-spherical particles (bodies) in the run loop. A particle is split into
 // elements: a sphere or a clump sub-sphere is a sphere element, a superquadric is one convex
 // element. Element pairs are dispatched by kind: sphere-sphere analytically, anything with a convex
-// element through the support-map narrow phase (geometry/convex_contact.hpp); a polyhedron will be
-// one more element kind with its own overload (geometry/polyhedron_contact.hpp, not wired yet).
+// element through the support-map narrow phase (geometry/convex_contact.hpp); a convex polyhedron
+// is one element of its own kind: polyhedron pairs by the fast common plane (or libccd GJK/EPA),
+// a sphere against a polyhedron by the exact closest feature (geometry/polyhedron_contact.hpp).
+// Polyhedron-superquadric pairs are refused when the scene is built (System::add_body).
 //
 // Normal convention: `normal` points from element b to element a (world frame), as in
 // convex_contact.hpp; moving a by overlap * normal separates the two.
@@ -12,6 +14,7 @@
 #include "dynamics/scene_spec.hpp"
 #include "dynamics/wall.hpp"
 #include "geometry/convex_contact.hpp"
+#include "geometry/polyhedron_contact.hpp"
 #include "geometry/shape.hpp"
 
 #include <compare>
@@ -22,13 +25,16 @@ namespace kiln::dynamics {
 
 /// One element of a posed particle, world frame.
 struct Element {
-    enum class Kind { sphere, superquadric };
+    enum class Kind { sphere, superquadric, polyhedron };
     Kind kind = Kind::sphere;
     Vec3 centre = Vec3::Zero();                 ///< sphere centre or body centre (m, world)
     double radius = 0.0;                        ///< sphere radius or bounding radius (m)
     const geometry::Superquadric* sq = nullptr; ///< superquadric geometry (body frame)
     Quat q = Quat::Identity();                  ///< orientation of a superquadric, body -> world
-    double min_size = 0.0;                      ///< sphere radius or smallest half-axis (m)
+    double min_size = 0.0; ///< sphere radius, smallest half-axis or polyhedron in-radius (m)
+    const geometry::PolyhedronFeatures* poly = nullptr; ///< polyhedron features (body frame)
+    const geometry::ConvexPolyhedron* hull = nullptr;   ///< polyhedron triangles (body frame)
+    double r_equiv = 0.0; ///< volume-equivalent sphere radius of a polyhedron (m)
 };
 
 /// Key of one element contact: particle ids a < b (b = -1 - wall index for a wall) and the element
@@ -72,15 +78,25 @@ struct NarrowPhaseCounters {
 };
 
 /// Appends the elements of a particle (centre x, orientation q, radius r) of template t (nullptr:
-/// a sphere) to `out`.
+/// a sphere) to `out`. A polyhedron template needs the overload with its features.
 void append_elements(const geometry::ShapeTemplate* t, const Vec3& x, const Quat& q, double r,
                      std::vector<Element>& out);
+
+/// As above; `features` are the template's polyhedron features (body frame; nullptr unless t is a
+/// polyhedron, which then must have them).
+void append_elements(const geometry::ShapeTemplate* t, const geometry::PolyhedronFeatures* features,
+                     const Vec3& x, const Quat& q, double r, std::vector<Element>& out);
+
+/// Volume-equivalent sphere radius of a polyhedron template (m): the Hertz radius of its contacts
+/// (docs/theory/contact.md, "Polyhedra").
+[[nodiscard]] double equivalent_radius(const geometry::ShapeTemplate& t);
 
 /// Contact of two elements; `warm` is the previous normal (b to a) or nullptr.
 [[nodiscard]] ElementContact element_contact(const Element& a, const Element& b, NarrowPhase method,
                                              const Vec3* warm);
 
-/// Contact of an element with a wall (normal from the wall into the element).
+/// Contact of an element with a wall (normal from the wall into the element). A polyhedron's
+/// contact point is its deepest vertex, or the weighted average of the almost equally deep ones.
 [[nodiscard]] ElementContact element_wall_contact(const Element& a, const WallShape& w);
 
 } // namespace kiln::dynamics

@@ -38,9 +38,11 @@ struct OrientationSpec {
     Quat fixed = Quat::Identity(); ///< used when not random: body -> world
 };
 
-/// Narrow-phase method for pairs involving a superquadric (geometry/convex_contact.hpp).
+/// Narrow-phase method for pairs involving a superquadric (geometry/convex_contact.hpp) or two
+/// polyhedra (geometry/polyhedron_contact.hpp).
 enum class NarrowPhase {
-    newton, ///< Newton on the sphere of directions, warm-started from the last normal (default)
+    newton, ///< superquadrics: Newton on the sphere of directions, warm-started from the last
+            ///< normal; polyhedra: the exact fast common plane (default)
     gjk_epa ///< libccd GJK + EPA
 };
 
@@ -85,11 +87,12 @@ struct SceneSpec {
     bool sort_particles = true;      ///< reorder particles by cell at each list build
     int threads = 0;         ///< threads of the step loop; 0 = the OpenMP default (OMP_NUM_THREADS)
     std::vector<Wall> walls; ///< walls
-    std::vector<InsertSpec> inserts;     ///< insertion blocks, in order
-    std::vector<ParticleSpec> particles; ///< explicitly placed particles (inserted first)
-    Vec3 gravity = Vec3(0, 0, -9.81);    ///< gravitational acceleration (m/s^2, world)
-    double time_step = 0;                ///< mechanical time step (s)
-    std::uint64_t seed = 1;              ///< seed of the random stream
+    std::vector<MeshWallSpec> mesh_walls; ///< triangle-mesh walls (after `walls` in contact keys)
+    std::vector<InsertSpec> inserts;      ///< insertion blocks, in order
+    std::vector<ParticleSpec> particles;  ///< explicitly placed particles (inserted first)
+    Vec3 gravity = Vec3(0, 0, -9.81);     ///< gravitational acceleration (m/s^2, world)
+    double time_step = 0;                 ///< mechanical time step (s)
+    std::uint64_t seed = 1;               ///< seed of the random stream
     double time_step_fraction =
         0.1; ///< warn when dt > this fraction of min(Rayleigh, contact time)
     bool allow_unsafe_time_step = false; ///< turn the "dt above critical" error into a warning

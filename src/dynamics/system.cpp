@@ -47,6 +47,12 @@ System::System(const SceneSpec& spec)
         nl_ = contact::NeighbourList(spec_.skin);
     }
     nl_.set_threads(threads_);
+    poly_features_.resize(spec_.shapes.size());
+    for (std::size_t k = 0; k < spec_.shapes.size(); ++k) {
+        if (const auto* ph = std::get_if<geometry::ConvexPolyhedron>(&spec_.shapes[k].shape)) {
+            poly_features_[k] = geometry::polyhedron_features(*ph);
+        }
+    }
     for (const auto& ps : spec_.particles) {
         if (ps.shape >= 0) {
             add_body(ps.material, ps.shape, ps.x, ps.v, ps.omega,
@@ -74,12 +80,23 @@ std::size_t System::add_particle(int material, double radius, const Vec3& x, con
 std::size_t System::add_body(int material, int shape, const Vec3& x, const Vec3& v,
                              const Vec3& omega, const Quat& q) {
     const geometry::ShapeTemplate& t = spec_.shapes.at(static_cast<std::size_t>(shape));
-    if (std::holds_alternative<geometry::ConvexPolyhedron>(t.shape)) {
+    const bool poly = std::holds_alternative<geometry::ConvexPolyhedron>(t.shape);
+    const bool sq = std::holds_alternative<geometry::Superquadric>(t.shape);
+    if ((poly && has_superquadrics_) || (sq && has_polyhedra_)) {
         throw InputError("", 0, "shape",
-                         fmt::format("\"{}\" is a polyhedron; polyhedron particles are not yet "
-                                     "supported by kiln run (clumps and superquadrics are)",
+                         fmt::format("\"{}\": polyhedra and superquadrics in one scene are not yet "
+                                     "supported (their pair contact is not wired)",
                                      t.name));
     }
+    if (sq && !spec_.mesh_walls.empty()) {
+        throw InputError(
+            "", 0, "shape",
+            fmt::format("\"{}\" is a superquadric; superquadrics against mesh walls are "
+                        "not yet supported (spheres, clumps and polyhedra are)",
+                        t.name));
+    }
+    has_polyhedra_ = has_polyhedra_ || poly;
+    has_superquadrics_ = has_superquadrics_ || sq;
     const double rho = spec_.materials.at(static_cast<std::size_t>(material)).density;
     const std::size_t i = p_.add_body(next_id_++, material, shape, t.bounding_radius(), t.mass(rho),
                                       t.inertia(rho), x, v, q, omega);
@@ -124,6 +141,9 @@ void System::check_time_step() {
                 }
             } else if (const auto* sq = std::get_if<geometry::Superquadric>(&shape)) {
                 size = sq->half_axes.minCoeff();
+            } else if (std::holds_alternative<geometry::ConvexPolyhedron>(shape)) {
+                // The Hertz radius of polyhedron contacts (body_contact.hpp).
+                size = equivalent_radius(spec_.shapes[static_cast<std::size_t>(p_.shape[i])]);
             }
         }
         r = std::min(r, size);
@@ -552,7 +572,7 @@ void System::half_kick(std::size_t p0, std::size_t p1) {
 
 void System::compute_forces(bool kick_requested) {
     // With bodies, their contacts are added after the sphere loop (body_forces), so the kick waits.
-    const bool kick = kick_requested && !has_bodies_;
+    const bool kick = kick_requested && !generic_contacts();
     const std::size_t n = p_.size();
     const std::size_t entries = nl_.partners().size();
     const bool direct = threads_ == 1;
@@ -612,7 +632,7 @@ void System::compute_forces(bool kick_requested) {
     // Bodies: element contacts in a fixed serial order, then the kick of every particle.
     ChunkTotals body_pairs;
     ChunkTotals body_walls;
-    if (has_bodies_) {
+    if (generic_contacts()) {
         body_forces(body_pairs, body_walls);
         if (kick_requested) {
 #pragma omp parallel for num_threads(threads_) schedule(static)

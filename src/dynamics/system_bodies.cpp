@@ -45,8 +45,12 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
     element_begin_.assign(p_.size() + 1, 0);
     for (std::size_t i = 0; i < p_.size(); ++i) {
         element_begin_[i] = static_cast<std::uint32_t>(elements_.size());
-        append_elements(tmpl(static_cast<std::uint32_t>(i)), p_.x[i], p_.q[i], p_.radius[i],
-                        elements_);
+        const geometry::PolyhedronFeatures* features =
+            p_.shape[i] >= 0 && !poly_features_[static_cast<std::size_t>(p_.shape[i])].edges.empty()
+                ? &poly_features_[static_cast<std::size_t>(p_.shape[i])]
+                : nullptr;
+        append_elements(tmpl(static_cast<std::uint32_t>(i)), features, p_.x[i], p_.q[i],
+                        p_.radius[i], elements_);
     }
     element_begin_[p_.size()] = static_cast<std::uint32_t>(elements_.size());
 
@@ -157,6 +161,43 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         apply(a, -1, key, ec, it == body_contacts_.end() ? nullptr : &it->second,
                               spec_.walls[w].material,
                               ec.overlap / ratio_size(elements_[ea], nullptr), wall_totals);
+                    }
+                }
+            }
+
+            // Mesh walls, wall by wall and particle by particle (spheres too: a sphere may touch
+            // several features, each with its own history keyed by feature kind and id).
+            const auto n_walls = static_cast<std::int64_t>(spec_.walls.size());
+            for (std::size_t m = 0; m < spec_.mesh_walls.size(); ++m) {
+                const MeshWallSpec& mw = spec_.mesh_walls[m];
+                for (std::uint32_t a = 0; a < p_.size(); ++a) {
+                    const std::uint32_t a0 = element_begin_[a];
+                    for (std::uint32_t ea = a0; ea < element_begin_[a + 1]; ++ea) {
+                        const Element& A = elements_[ea];
+                        if (A.kind == Element::Kind::polyhedron) {
+                            mw.mesh->polyhedron_contacts({A.poly, A.centre, A.q}, mesh_buf_);
+                        } else if (A.kind == Element::Kind::sphere) {
+                            mw.mesh->sphere_contacts(A.centre, A.radius, mesh_buf_);
+                        } else {
+                            continue; // superquadrics are refused with mesh walls (add_body)
+                        }
+                        for (const geometry::MeshContact& mc : mesh_buf_) {
+                            ElementContact ec;
+                            ec.touching = true;
+                            ec.overlap = mc.depth;
+                            ec.normal = mc.normal;
+                            ec.point = mc.point;
+                            // Flat wall: sphere radius, or the polyhedron's equivalent sphere.
+                            ec.r_eff = A.kind == Element::Kind::polyhedron ? A.r_equiv : A.radius;
+                            const BodyContactKey key{
+                                p_.id[a], -1 - n_walls - static_cast<std::int64_t>(m),
+                                static_cast<std::int32_t>(ea - a0),
+                                (static_cast<std::int32_t>(mc.feature) << 28) | mc.id};
+                            const auto it = body_contacts_.find(key);
+                            apply(a, -1, key, ec,
+                                  it == body_contacts_.end() ? nullptr : &it->second, mw.material,
+                                  ec.overlap / ratio_size(A, nullptr), wall_totals);
+                        }
                     }
                 }
             }

@@ -3,8 +3,10 @@
 // contact laws as sphere-sphere contacts with the wall as body j (infinite mass, at rest).
 
 #include "core/types.hpp"
+#include "geometry/mesh_wall.hpp"
 
 #include <cmath>
+#include <memory>
 #include <string>
 #include <variant>
 
@@ -30,6 +32,14 @@ struct Wall {
     std::string name; ///< label used in output and messages
     WallShape shape;  ///< geometry
     int material = 0; ///< material index
+};
+
+/// A triangle-mesh wall of the scene (world frame). Its contacts with every particle go through
+/// the body path (System::body_forces), with tangential history keyed by the mesh feature.
+struct MeshWallSpec {
+    std::string name;                               ///< label used in output and messages
+    std::shared_ptr<const geometry::MeshWall> mesh; ///< triangles, world frame
+    int material = 0;                               ///< material index
 };
 
 /// Sphere-wall contact geometry, world frame.

@@ -493,6 +493,25 @@ bool misses(const std::array<detail::Vec2, 3>& t2, const std::array<detail::Vec2
 
 } // namespace
 
+double MeshWall::signed_distance(const Vec3& x) const {
+    double best = std::numeric_limits<double>::infinity();
+    double side = 1.0;
+    for (std::size_t t = 0; t < triangles_.size(); ++t) {
+        const auto c = corners(static_cast<int>(t));
+        int region = 0;
+        const Vec3 q = closest_on_triangle(x, c[0], c[1], c[2], region);
+        const double d = (x - q).norm();
+        const double s = normals_[t].dot(x - q);
+        // Ties (a shared edge or vertex): the triangle seen most squarely decides the side.
+        if (d < best * (1.0 - 1e-12) ||
+            (d <= best * (1.0 + 1e-12) && std::abs(s) > std::abs(side))) {
+            best = std::min(best, d);
+            side = s;
+        }
+    }
+    return side < 0.0 ? -best : best;
+}
+
 std::array<Vec3, 3> MeshWall::corners(int t) const {
     const auto& tri = triangles_[static_cast<std::size_t>(t)];
     return {vertices_[static_cast<std::size_t>(tri[0])],

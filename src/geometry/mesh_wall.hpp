@@ -62,6 +62,11 @@ class MeshWall {
     /// Contacts of a posed convex polyhedron (one per touched facet); `out` is cleared first.
     void polyhedron_contacts(const PosedPolyhedron& p, std::vector<MeshContact>& out) const;
 
+    /// Signed distance of a point x (m, world) from the nearest triangle (m): positive on the side
+    /// the normals point to (the particles' side). Brute force over all triangles: for set-up
+    /// checks, not for the step loop.
+    [[nodiscard]] double signed_distance(const Vec3& x) const;
+
     /// Vertices (m), world frame.
     [[nodiscard]] const std::vector<Vec3>& vertices() const { return vertices_; }
     /// Triangles (vertex indices).

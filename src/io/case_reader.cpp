@@ -1,16 +1,19 @@
 #include "io/case_reader.hpp"
+#include "io/mesh_reader.hpp"
 #include "io/shape_reader.hpp"
 #include "io/toml_text.hpp"
 
 #include "core/error.hpp"
 #include "heat/resolved_model.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fmt/format.h>
 #include <fstream>
 #include <limits>
 #include <map>
+#include <memory>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -471,13 +474,90 @@ void read_wall_temperature(Section& s, CaseSpec& c, std::size_t first) {
     }
 }
 
-void read_walls(Section& root, CaseSpec& c, const std::map<std::string, int>& mats) {
+/// Where a mesh wall was declared, for the side check once the particles are known.
+struct MeshWallSite {
+    long line = 0;    ///< line of its `file` key
+    std::string path; ///< full key path of `flip`
+};
+
+/// A mesh wall: `file` (relative to the case file), `scale`, `translate`, `flip`.
+void read_mesh_wall(Section& s, CaseSpec& c, const std::string& name, int mat,
+                    std::vector<MeshWallSite>& sites) {
+    const std::string file = s.text("file", std::nullopt);
+    const double scale = s.real("scale", 1.0, positive(), "-");
+    const Vec3 shift = s.vec3("translate", Vec3::Zero(), "m");
+    const bool flip = s.boolean("flip", false);
+    const std::filesystem::path dir = std::filesystem::path(s.file()).parent_path();
+    const std::filesystem::path path = dir.empty() ? std::filesystem::path(file) : dir / file;
+    MeshInput m;
+    try {
+        m = read_mesh_file(path, scale, false);
+    } catch (const InputError& e) {
+        s.fail_at("file", e.what());
+    }
+    if (m.triangles.empty()) {
+        s.fail_at("file", fmt::format("\"{}\" has no triangles; a mesh wall needs faces "
+                                      "(STL facets or OBJ f records)",
+                                      path.string()));
+    }
+    for (Vec3& x : m.points) {
+        x += shift;
+    }
+    if (flip) {
+        for (auto& t : m.triangles) {
+            std::swap(t[1], t[2]);
+        }
+    }
+    try {
+        auto mesh = std::make_shared<const geometry::MeshWall>(
+            std::move(m.points), std::move(m.triangles), path.string());
+        c.scene.mesh_walls.push_back({name, std::move(mesh), mat});
+    } catch (const InputError& e) {
+        s.fail_at("file", e.what());
+    }
+    // The resolved case names the file absolutely, so that it reads again from the output folder.
+    s.out().insert_or_assign("file", std::filesystem::absolute(path).lexically_normal().string());
+    sites.push_back({s.line_of("file"), s.full("flip")});
+}
+
+/// Particles and insertion-region centres must lie on the front side of every mesh wall (the side
+/// its triangle normals point to); a point behind it means the normals face the wrong way.
+void check_mesh_sides(const CaseSpec& c, const std::string& file,
+                      const std::vector<MeshWallSite>& sites) {
+    std::vector<std::pair<Vec3, std::string>> points;
+    for (std::size_t k = 0; k < c.scene.particles.size(); ++k) {
+        points.emplace_back(c.scene.particles[k].x, fmt::format("particle {}", k + 1));
+    }
+    for (std::size_t k = 0; k < c.scene.inserts.size(); ++k) {
+        const Aabb& r = c.scene.inserts[k].region;
+        points.emplace_back(0.5 * (r.lo + r.hi), fmt::format("the centre of insert {}", k + 1));
+    }
+    for (std::size_t w = 0; w < c.scene.mesh_walls.size(); ++w) {
+        const auto& mesh = *c.scene.mesh_walls[w].mesh;
+        for (const auto& [x, what] : points) {
+            const double d = mesh.signed_distance(x);
+            if (d < 0.0) {
+                throw InputError(
+                    file, sites[w].line, sites[w].path,
+                    fmt::format("{} at ({:g}, {:g}, {:g}) m is {:.3g} m behind the mesh (its "
+                                "triangle normals point away from it); set flip = true to "
+                                "reverse them, or move the particles to the normals' side",
+                                what, x.x(), x.y(), x.z(), -d));
+            }
+        }
+    }
+}
+
+void read_walls(Section& root, CaseSpec& c, const std::map<std::string, int>& mats,
+                std::vector<MeshWallSite>& sites) {
     for_each_table(root, "wall", [&](Section& s, std::size_t k) {
-        const std::string type = s.text("type", std::nullopt, {"plane", "box", "cylinder"});
+        const std::string type = s.text("type", std::nullopt, {"plane", "box", "cylinder", "mesh"});
         const int mat = material_index(s, "material", mats);
         const std::string name = s.text("name", fmt::format("{}{}", type, k));
         const std::size_t first_wall = c.scene.walls.size();
-        if (type == "plane") {
+        if (type == "mesh") {
+            read_mesh_wall(s, c, name, mat, sites);
+        } else if (type == "plane") {
             dynamics::PlaneWall w;
             w.point = s.vec3("point", std::nullopt, "m");
             w.normal = s.vec3("normal", std::nullopt, "-", true).normalized();
@@ -503,8 +583,16 @@ void read_walls(Section& root, CaseSpec& c, const std::map<std::string, int>& ma
             w.radius = s.real("radius", std::nullopt, positive(), "m");
             c.scene.walls.push_back({name, w, mat});
         }
-        read_wall_temperature(s, c, first_wall);
-        s.finish({"point", "normal", "min", "max", "axis", "radius", "temperature"});
+        if (type == "mesh") {
+            if (s.has("temperature")) {
+                s.fail_at("temperature", "mesh walls are adiabatic for now; a prescribed "
+                                         "temperature is allowed on plane, box and cylinder walls");
+            }
+        } else {
+            read_wall_temperature(s, c, first_wall);
+        }
+        s.finish({"point", "normal", "min", "max", "axis", "radius", "file", "scale", "translate",
+                  "flip", "temperature"});
     });
 }
 
@@ -547,10 +635,25 @@ int read_shape(Section& s, CaseSpec& c, ShapeTable& shapes) {
         s.fail_at("shape", e.what());
     }
     geometry::ShapeTemplate t = read_shape_file(file);
-    if (std::holds_alternative<geometry::ConvexPolyhedron>(t.shape)) {
-        s.fail_at("shape", fmt::format("\"{}\" is a polyhedron; polyhedron particles are not yet "
-                                       "supported by kiln run; allowed: sphere, clump and "
-                                       "superquadric templates",
+    const auto holds = [&](auto tag) {
+        return std::any_of(c.scene.shapes.begin(), c.scene.shapes.end(), [](const auto& u) {
+            return std::holds_alternative<decltype(tag)>(u.shape);
+        });
+    };
+    const bool is_sq = std::holds_alternative<geometry::Superquadric>(t.shape);
+    const bool is_poly = std::holds_alternative<geometry::ConvexPolyhedron>(t.shape);
+    if ((is_poly && holds(geometry::Superquadric{})) ||
+        (is_sq && holds(geometry::ConvexPolyhedron{}))) {
+        s.fail_at("shape", fmt::format("\"{}\": polyhedra and superquadrics in one case are not "
+                                       "yet supported (their pair contact is not wired); allowed: "
+                                       "polyhedra with spheres and clumps, or superquadrics with "
+                                       "spheres and clumps",
+                                       name));
+    }
+    if (is_sq && !c.scene.mesh_walls.empty()) {
+        s.fail_at("shape", fmt::format("\"{}\" is a superquadric; superquadrics against mesh "
+                                       "walls are not yet supported (spheres, clumps and "
+                                       "polyhedra are)",
                                        name));
     }
     if (const auto* sq = std::get_if<geometry::Superquadric>(&t.shape)) {
@@ -863,7 +966,8 @@ CaseSpec read_case_text(const std::string& text, const std::string& name) {
         c.scene.pairs.push_back(o);
     });
 
-    read_walls(root, c, mats);
+    std::vector<MeshWallSite> mesh_sites;
+    read_walls(root, c, mats, mesh_sites);
 
     // [[particle]]
     ShapeTable shapes = shape_table_for(name);
@@ -898,6 +1002,7 @@ CaseSpec read_case_text(const std::string& text, const std::string& name) {
     if (c.scene.particles.empty() && c.scene.inserts.empty()) {
         root.fail("insert", 0, "the case has no particles; add [[particle]] or [[insert]] tables");
     }
+    check_mesh_sides(c, name, mesh_sites);
 
     // [output]
     {

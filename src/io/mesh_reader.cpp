@@ -180,6 +180,10 @@ void check_closed(const MeshInput& m, const std::filesystem::path& file) {
 } // namespace
 
 MeshInput read_mesh_file(const std::filesystem::path& file, double scale) {
+    return read_mesh_file(file, scale, true);
+}
+
+MeshInput read_mesh_file(const std::filesystem::path& file, double scale, bool require_closed) {
     const std::string ext = lower(file.extension().string());
     MeshInput m;
     if (ext == ".obj") {
@@ -190,7 +194,7 @@ MeshInput read_mesh_file(const std::filesystem::path& file, double scale) {
         throw InputError(file.string(), 0, "",
                          fmt::format("unknown mesh format '{}'; allowed: .obj, .stl", ext));
     }
-    if (!m.triangles.empty()) {
+    if (require_closed && !m.triangles.empty()) {
         check_closed(m, file);
     }
     for (Vec3& p : m.points) {

@@ -23,4 +23,8 @@ struct MeshInput {
 /// file has faces that do not close the surface (an edge not shared by exactly two faces).
 [[nodiscard]] MeshInput read_mesh_file(const std::filesystem::path& file, double scale);
 
+/// As above; with `require_closed = false` open surfaces are accepted (mesh walls).
+[[nodiscard]] MeshInput read_mesh_file(const std::filesystem::path& file, double scale,
+                                       bool require_closed);
+
 } // namespace kiln::io

@@ -282,9 +282,14 @@ TEST(CaseReader, ShapeErrorsAreLocated) {
               std::string::npos);
     EXPECT_NE(error_of(body("radius = 1e-3\norientation = \"random\"\n")).find("only used with"),
               std::string::npos);
-    // Polyhedra are not yet run.
-    EXPECT_NE(error_of(body("shape = \"cube\"\n")).find("not yet supported by kiln run"),
-              std::string::npos);
+    // Polyhedra run, but not next to superquadrics.
+    EXPECT_EQ(error_of(body("shape = \"cube\"\n")), "");
+    const std::string mixed = error_of(
+        body("shape = \"cube\"\n") + "\n[[particle]]\nmaterial = \"glass\"\n"
+                                     "position = [0.01, 0.01, 0.015]\nshape = \"ellipsoid_123\"\n");
+    EXPECT_NE(mixed.find("polyhedra and superquadrics in one case are not yet supported"),
+              std::string::npos)
+        << mixed;
 }
 
 TEST(CaseReader, SuperquadricAspectRatioAboveTenIsRefused) {
@@ -298,6 +303,82 @@ TEST(CaseReader, SuperquadricAspectRatioAboveTenIsRefused) {
     EXPECT_EQ(read_case_text(text("rod_ok"), folder.path()).scene.shapes.size(), 1U);
     const std::string e = error_of_file(text("rod_long"), folder.path());
     EXPECT_NE(e.find("aspect ratios up to 10"), std::string::npos) << e;
+}
+
+/// A case folder with mesh files: an open square plate (flat), a closed box with outward normals
+/// and a mesh with a zero-area triangle.
+struct MeshFolder {
+    std::filesystem::path dir;
+    MeshFolder() {
+        dir = std::filesystem::temp_directory_path() / "kiln_test_case_meshes";
+        std::filesystem::create_directories(dir);
+        std::ofstream(dir / "plate.obj") << "v 0 0 0\nv 0.02 0 0\nv 0.02 0.02 0\nv 0 0.02 0\n"
+                                            "f 1 2 3\nf 1 3 4\n";
+        std::ofstream(dir / "sliver.obj") << "v 0 0 0\nv 0.01 0 0\nv 0.02 0 0\nf 1 2 3\n";
+        // Unit cube with outward normals, scaled to 20 mm by the case.
+        std::ofstream(dir / "box.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                          "v 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                                          "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\n"
+                                          "f 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\n"
+                                          "f 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n";
+    }
+    ~MeshFolder() { std::filesystem::remove_all(dir); }
+    MeshFolder(const MeshFolder&) = delete;
+    MeshFolder& operator=(const MeshFolder&) = delete;
+    [[nodiscard]] std::string path() const { return (dir / "case.toml").string(); }
+};
+
+/// The good case with its analytic box replaced by a mesh wall of the given keys.
+std::string with_mesh(const std::string& keys) {
+    return edit("type = \"box\"\nmaterial = \"glass\"\nmin = [0, 0, 0]\nmax = [0.02, 0.02, 0.04]",
+                "type = \"mesh\"\nmaterial = \"glass\"\n" + keys);
+}
+
+TEST(CaseReader, MeshWallReadsRelativeToTheCaseFile) {
+    const MeshFolder folder;
+    // A flat, open plate is a valid wall (no closure check for walls); translate moves it.
+    const CaseSpec c = read_case_text(
+        with_mesh("file = \"plate.obj\"\ntranslate = [0, 0, 0.001]\n"), folder.path());
+    ASSERT_EQ(c.scene.mesh_walls.size(), 1U);
+    EXPECT_TRUE(c.scene.walls.empty());
+    const auto& mesh = *c.scene.mesh_walls[0].mesh;
+    EXPECT_EQ(mesh.triangles().size(), 2U);
+    EXPECT_DOUBLE_EQ(mesh.vertices()[0].z(), 0.001);
+    // The closed box flipped into a container, scaled to a 40 mm cube around the insert region: the
+    // particles are inside.
+    const CaseSpec box = read_case_text(
+        with_mesh("file = \"box.obj\"\nscale = 0.04\ntranslate = [-0.01, -0.01, 0]\nflip = true\n"),
+        folder.path());
+    EXPECT_EQ(box.scene.mesh_walls[0].mesh->facet_count(), 6);
+    EXPECT_NE(box.resolved_toml.find("flip = true"), std::string::npos);
+    // The resolved text names the mesh absolutely and reads again from anywhere.
+    const CaseSpec again = read_case_text(box.resolved_toml, "elsewhere/resolved.toml");
+    EXPECT_EQ(again.scene.mesh_walls.size(), 1U);
+}
+
+TEST(CaseReader, MeshWallErrorsAreLocated) {
+    const MeshFolder folder;
+    // Missing file: the key and the path are named.
+    const std::string missing = error_of_file(with_mesh("file = \"nope.stl\"\n"), folder.path());
+    EXPECT_NE(missing.find("wall[0].file"), std::string::npos) << missing;
+    EXPECT_NE(missing.find("nope.stl"), std::string::npos) << missing;
+    // Unknown format.
+    EXPECT_NE(error_of_file(with_mesh("file = \"plate.ply\"\n"), folder.path())
+                  .find("unknown mesh format"),
+              std::string::npos);
+    // A triangle of zero area (collinear corners).
+    const std::string sliver = error_of_file(with_mesh("file = \"sliver.obj\"\n"), folder.path());
+    EXPECT_NE(sliver.find("wall[0].file"), std::string::npos) << sliver;
+    // Wrong side: the box with outward normals and the particles inside it.
+    const std::string side = error_of_file(
+        with_mesh("file = \"box.obj\"\nscale = 0.04\ntranslate = [-0.01, -0.01, 0]\n"),
+        folder.path());
+    EXPECT_NE(side.find("wall[0].flip"), std::string::npos) << side;
+    EXPECT_NE(side.find("behind the mesh"), std::string::npos) << side;
+    // Scale must be positive.
+    EXPECT_NE(error_of_file(with_mesh("file = \"plate.obj\"\nscale = 0\n"), folder.path())
+                  .find("wall[0].scale"),
+              std::string::npos);
 }
 
 } // namespace
