@@ -705,6 +705,9 @@ void System::collect_contacts(std::vector<ContactRecord>& out) const {
     for (std::size_t k = 0; k < nb.size(); ++k) {
         const std::uint32_t i = owner[k];
         const std::uint32_t j = nb[k];
+        if (p_.shape[i] >= 0 || p_.shape[j] >= 0) {
+            continue; // pairs with a body: from body_contacts_ below
+        }
         const double rsum = p_.radius[i] + p_.radius[j];
         const Vec3 d = p_.x[j] - p_.x[i];
         const double d2 = d.squaredNorm();
@@ -739,6 +742,32 @@ void System::collect_contacts(std::vector<ContactRecord>& out) const {
             c.r_eff = g.r_eff;
             out.push_back(c);
         }
+    }
+    if (!has_bodies_) {
+        return;
+    }
+    // Element contacts of bodies from the last force evaluation, in key order (ids, elements):
+    // one record per touching element pair, carrying the body (particle) index. Their normal runs
+    // from b to a; a record's normal runs from i = a to its partner, hence the sign change.
+    std::int64_t max_id = 0;
+    for (const std::int64_t id : p_.id) {
+        max_id = std::max(max_id, id);
+    }
+    std::vector<std::uint32_t> index(static_cast<std::size_t>(max_id) + 1, 0);
+    for (std::size_t i = 0; i < p_.size(); ++i) {
+        index[static_cast<std::size_t>(p_.id[i])] = static_cast<std::uint32_t>(i);
+    }
+    for (const auto& [key, bc] : body_contacts_) {
+        ContactRecord c;
+        c.i = index[static_cast<std::size_t>(key.a)];
+        c.wall = key.b < 0;
+        c.j = c.wall ? static_cast<std::uint32_t>(-1 - key.b)
+                     : index[static_cast<std::size_t>(key.b)];
+        c.point = bc.point;
+        c.normal = -bc.normal;
+        c.overlap = bc.overlap;
+        c.r_eff = bc.r_eff;
+        out.push_back(c);
     }
 }
 

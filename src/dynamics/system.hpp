@@ -107,9 +107,12 @@ class System {
     /// Checks that positions and velocities are finite; throws RunError otherwise.
     void check_finite() const;
 
-    /// Every touching sphere-sphere and sphere-wall contact of the current state (world frame),
-    /// pairs first in neighbour-list order, then walls in wall order. Reads the neighbour list and
-    /// wall candidates only; the mechanics are untouched. `out` is cleared first.
+    /// Every touching contact of the current state (world frame): sphere-sphere pairs in
+    /// neighbour-list order, then sphere-wall contacts in wall order, then the element contacts
+    /// of bodies (clump members, superquadrics) from the last force evaluation in key order, one
+    /// record per touching element pair with the body's particle index (a pair of clumps can
+    /// give several records). Reads stored data only; the mechanics are untouched. `out` is
+    /// cleared first.
     void collect_contacts(std::vector<ContactRecord>& out) const;
 
     /// Copies out the full evolving state (checkpoint).

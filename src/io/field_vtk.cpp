@@ -104,7 +104,7 @@ void FieldSeriesWriter::write(const dynamics::System& sys, const thermal::Therma
             }
             std::array<vtkIdType, 8> ids8{};
             for (std::size_t q = 0; q < 8; ++q) {
-                const Vec3 w = v.position + x[q]; // body axes = world axes (spheres)
+                const Vec3 w = v.position + v.q * x[q]; // body -> world
                 ids8[q] = pts->InsertNextPoint(w.data());
             }
             ug->InsertNextCell(VTK_HEXAHEDRON, 8, ids8.data());

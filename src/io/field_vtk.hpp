@@ -22,7 +22,8 @@ class FieldSeriesWriter {
     FieldSeriesWriter(std::filesystem::path out_dir, std::size_t first_index);
 
     /// Writes the fields of particles `ids` (all resolved particles when empty) at the current
-    /// time (m, world frame; spheres: body axes = world axes). Throws InputError on write errors.
+    /// time (m, world frame: a body's cells turned by its orientation q, spheres with body axes =
+    /// world axes). Throws InputError on write errors.
     void write(const dynamics::System& sys, const thermal::ThermalSystem& heat,
                const std::vector<long>& ids);
 

@@ -4,8 +4,8 @@
 
 #include "dynamics/scene_spec.hpp"
 #include "dynamics/system.hpp"
-#include "thermal/thermal_system.hpp"
 #include "geometry/surface_mesh.hpp"
+#include "thermal/thermal_system.hpp"
 
 #include <filesystem>
 #include <map>

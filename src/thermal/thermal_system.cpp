@@ -1,6 +1,7 @@
 #include "thermal/thermal_system.hpp"
 
 #include "core/error.hpp"
+#include "geometry/shape_metrics.hpp"
 #include "heat/cartesian_grid.hpp"
 #include "heat/contact_conduction.hpp"
 #include "heat/convection.hpp"
@@ -33,6 +34,27 @@ double sphere_volume(double r) {
 
 double sphere_area(double r) {
     return 4.0 * std::numbers::pi * r * r;
+}
+
+/// Template of particle index i, nullptr for a sphere.
+const geometry::ShapeTemplate* shape_of(const dynamics::System& sys, std::size_t i) {
+    const int s = sys.particles().shape[i];
+    return s >= 0 ? &sys.spec().shapes[static_cast<std::size_t>(s)] : nullptr;
+}
+
+/// The heat module's version of a body's shape (body frame); throws a located InputError for
+/// shapes without a heat grid yet (clumps, polyhedra).
+heat::Shape heat_shape(const geometry::ShapeTemplate& t, const std::string& material) {
+    if (const auto* sq = std::get_if<geometry::Superquadric>(&t.shape)) {
+        return heat::Superquadric{sq->half_axes, sq->e1, sq->e2};
+    }
+    if (const auto* sp = std::get_if<geometry::Sphere>(&t.shape)) {
+        return heat::Sphere{sp->radius};
+    }
+    throw InputError(fmt::format(
+        "heat: material \"{}\" is resolved but shape template \"{}\" is a {}: resolved heat for "
+        "clump/polyhedron templates: not yet (use model = \"lumped\" for this material)",
+        material, t.name, geometry::kind_name(t.shape)));
 }
 
 /// Effective modulus of two bodies, 1 / ((1 - nu1^2) / E1 + (1 - nu2^2) / E2) (Pa).
@@ -97,12 +119,20 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
             }
         }
     }
-    // Largest radius per material decides "auto" (the thickest particle of the type).
+    // Surface area of every shape template (lumped bodies, Biot numbers).
+    for (const geometry::ShapeTemplate& t : sys.spec().shapes) {
+        shape_area_.push_back(geometry::surface_area(t.shape).value);
+    }
+    // The particle with the largest V / A per material decides "auto" (the thickest particle of
+    // the type; for spheres V / A = r / 3, so the largest radius).
     const ParticleStore& p = sys.particles();
-    std::vector<double> rmax(mats.size(), 0.0);
+    std::vector<std::pair<double, double>> thickest(mats.size(), {0.0, 0.0}); // (V, A)
     for (std::size_t i = 0; i < p.size(); ++i) {
-        auto& r = rmax[static_cast<std::size_t>(p.material[i])];
-        r = std::max(r, p.radius[i]);
+        const std::pair<double, double> va = volume_area(sys, i);
+        auto& best = thickest[static_cast<std::size_t>(p.material[i])];
+        if (best.second == 0.0 || va.first / va.second > best.first / best.second) {
+            best = va;
+        }
     }
     choice_.resize(mats.size());
     for (std::size_t m = 0; m < mats.size(); ++m) {
@@ -112,29 +142,84 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
             continue;
         }
         c.requested = mh.model;
-        if (rmax[m] > 0.0) {
-            c.biot = heat::biot_number(spec_.heat_transfer_coefficient, sphere_volume(rmax[m]),
-                                       sphere_area(rmax[m]), mh.conductivity);
+        if (thickest[m].second > 0.0) {
+            c.biot = heat::biot_number(spec_.heat_transfer_coefficient, thickest[m].first,
+                                       thickest[m].second, mh.conductivity);
         }
         c.used = heat::choose_model(mh.model, c.biot, spec_.biot_threshold);
-        if (c.used == heat::HeatModel::resolved) {
-            c.grid = mh.grid == GridKind::spherical ? "spherical" : "cartesian";
+    }
+    // Resolved bodies need a heat grid of their shape and a template matrix that does not depend
+    // on the orientation: refuse clumps and polyhedra, and the stagnation f(theta), before the
+    // run, for the particles placed by hand and those inserted later.
+    std::vector<std::tuple<int, int, std::string>> kinds; // (material, shape, where)
+    for (std::size_t k = 0; k < sys.spec().particles.size(); ++k) {
+        const auto& ps = sys.spec().particles[k];
+        kinds.emplace_back(ps.material, ps.shape, fmt::format("particle {}", k));
+    }
+    for (std::size_t k = 0; k < sys.spec().inserts.size(); ++k) {
+        const auto& ins = sys.spec().inserts[k];
+        kinds.emplace_back(ins.material, ins.shape, fmt::format("insert block {}", k));
+    }
+    for (const auto& [material, shape, where] : kinds) {
+        const auto m = static_cast<std::size_t>(material);
+        if (shape < 0 || choice_[m].used != heat::HeatModel::resolved) {
+            continue;
+        }
+        try {
+            (void)heat_shape(sys.spec().shapes[static_cast<std::size_t>(shape)], mats[m].name);
+        } catch (const InputError& e) {
+            throw InputError(fmt::format("{} ({})", e.what(), where));
+        }
+        if (spec_.stagnation && spec_.heat_transfer_coefficient > 0.0) {
+            throw InputError(fmt::format(
+                "heat: stagnation = true with resolved bodies (material \"{}\", {}): f(theta) "
+                "is built into a template's matrix and a body turns; not yet (use "
+                "stagnation = false or the lumped model)",
+                mats[m].name, where));
         }
     }
     sync(sys);
     for (std::size_t m = 0; m < mats.size(); ++m) {
+        MaterialChoice& c = choice_[m];
+        bool spherical = false;
+        bool cartesian = false;
         for (const auto& t : templates_) {
             if (t->material == static_cast<int>(m)) {
-                choice_[m].cells = t->grid->size();
+                c.cells = t->grid->size();
+                (t->spherical ? spherical : cartesian) = true;
             }
+        }
+        if (c.used == heat::HeatModel::resolved) {
+            if (!spherical && !cartesian) { // no particle yet: what spheres would get
+                spherical = spec_.materials[m].grid == GridKind::spherical;
+                cartesian = !spherical;
+            }
+            c.grid = spherical && cartesian ? "spherical+cartesian"
+                     : spherical            ? "spherical"
+                                            : "cartesian";
         }
     }
 }
 
+std::pair<double, double> ThermalSystem::volume_area(const dynamics::System& sys,
+                                                     std::size_t i) const {
+    const geometry::ShapeTemplate* t = shape_of(sys, i);
+    if (t == nullptr) {
+        const double r = sys.particles().radius[i];
+        return {sphere_volume(r), sphere_area(r)};
+    }
+    return {t->volume, shape_area_[static_cast<std::size_t>(sys.particles().shape[i])]};
+}
+
 ThermalSystem::~ThermalSystem() = default;
 
-int ThermalSystem::template_for(int material, double radius) {
-    const auto key = std::make_pair(material, std::bit_cast<std::uint64_t>(radius));
+int ThermalSystem::template_for(const dynamics::System& sys, std::size_t i) {
+    const int material = sys.particles().material[i];
+    const double radius = sys.particles().radius[i];
+    const geometry::ShapeTemplate* body = shape_of(sys, i);
+    const auto key = body != nullptr
+                         ? std::make_tuple(material, sys.particles().shape[i], std::uint64_t{0})
+                         : std::make_tuple(material, -1, std::bit_cast<std::uint64_t>(radius));
     const auto it = template_index_.find(key);
     if (it != template_index_.end()) {
         return it->second;
@@ -143,7 +228,8 @@ int ThermalSystem::template_for(int material, double radius) {
     auto t = std::make_unique<Template>();
     t->material = material;
     t->radius = radius;
-    t->spherical = mh.grid == GridKind::spherical;
+    // Bodies always get the Cartesian grid of their shape (the spherical grid is for spheres).
+    t->spherical = body == nullptr && mh.grid == GridKind::spherical;
     t->res = mh.spherical;
     if (t->spherical) {
         t->grid =
@@ -151,11 +237,14 @@ int ThermalSystem::template_for(int material, double radius) {
     } else {
         heat::CartesianResolution cr;
         cr.cells_across = mh.cells_across;
-        t->grid = std::make_shared<const heat::ThermalGrid>(
-            heat::make_cartesian_grid(heat::Sphere{radius}, cr));
+        const heat::Shape shape =
+            body != nullptr ? heat_shape(*body, material_names_[static_cast<std::size_t>(material)])
+                            : heat::Shape{heat::Sphere{radius}};
+        t->grid = std::make_shared<const heat::ThermalGrid>(heat::make_cartesian_grid(shape, cr));
     }
-    // Spheres have no orientation yet: body frame = world axes, so the stagnation direction is the
-    // same in every body and the local h goes into the template matrix exactly.
+    // Spheres have no orientation: body frame = world axes, so the stagnation direction is the
+    // same in every sphere and the local h goes into the template matrix exactly (resolved bodies
+    // with stagnation are refused in the constructor).
     if (spec_.heat_transfer_coefficient > 0.0 && spec_.stagnation) {
         t->h_face = heat::stagnation_distribution(*t->grid, -spec_.flow_direction,
                                                   spec_.heat_transfer_coefficient);
@@ -164,7 +253,9 @@ int ThermalSystem::template_for(int material, double radius) {
     }
     t->props.conductivity = mh.conductivity;
     t->props.heat_capacity = mh.specific_heat;
-    t->props.density = density_.at(static_cast<std::size_t>(material));
+    // Bodies: the density their mass uses (with a template's density correction), so C = m c_p.
+    t->props.density = density_.at(static_cast<std::size_t>(material)) *
+                       (body != nullptr ? body->density_factor() : 1.0);
     t->solver = spec_.solver;
     t->base_dt = dt_;
     const heat::ResolvedOperator& first = operator_for(*t, 1, 0);
@@ -216,12 +307,17 @@ void ThermalSystem::sync(const dynamics::System& sys) {
         if (used == heat::HeatModel::lumped) {
             r.slot = static_cast<int>(lumped_.size());
             lumped_.push_back(t0);
-            lumped_capacity_.push_back(density_[static_cast<std::size_t>(m)] * mh.specific_heat *
-                                       sphere_volume(p.radius[i]));
-            lumped_area_.push_back(sphere_area(p.radius[i]));
+            // rho c_p V and A of the sphere, or of the body's template (its mass density, with a
+            // template's density correction, so C = m c_p).
+            const auto [volume, area] = volume_area(sys, i);
+            const geometry::ShapeTemplate* body = shape_of(sys, i);
+            lumped_capacity_.push_back(density_[static_cast<std::size_t>(m)] *
+                                       (body != nullptr ? body->density_factor() : 1.0) *
+                                       mh.specific_heat * volume);
+            lumped_area_.push_back(area);
             lumped_rate_.push_back(0.0);
         } else if (used == heat::HeatModel::resolved) {
-            r.templ = template_for(m, p.radius[i]);
+            r.templ = template_for(sys, i);
             const heat::ThermalGrid& g = *templates_[static_cast<std::size_t>(r.templ)]->grid;
             r.slot = pool_.add(g.size(), t0);
             pool_template_.push_back(r.templ);
@@ -335,8 +431,11 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
         }
         const Material& mj = mats[static_cast<std::size_t>(mat_j)];
         const MaterialHeat& hj = spec_.materials[static_cast<std::size_t>(mat_j)];
+        // Bodies (element contacts) always use the Hertz radius: the lens rule needs sphere radii.
+        const bool body_i = p.shape[rec.i] >= 0;
+        const bool body_j = !rec.wall && p.shape[rec.j] >= 0;
         double rc = 0.0;
-        if (spec_.contact_radius == ContactRadius::hertz) {
+        if (spec_.contact_radius == ContactRadius::hertz || body_i || body_j) {
             rc = std::sqrt(rec.r_eff * rec.overlap);
         } else if (rec.wall) {
             // Intersection circle of a sphere with a plane at depth delta.
@@ -354,14 +453,21 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
             effective_modulus(ei, mi.poisson_ratio, ej, mj.poisson_ratio));
         d.conductance =
             heat::static_contact_conductance(hi.conductivity, hj.conductivity, rc, correction);
-        // Patches under the contact disc, in each body frame (identity rotation for spheres).
+        // Patches under the contact disc, in each body frame: world offsets and normals turned
+        // by q^-1 for bodies (world -> body); spheres have no orientation (world axes).
+        const auto patches = [&](const Record& r, std::uint32_t k, bool body, const Vec3& n) {
+            const auto& g = *templates_[static_cast<std::size_t>(r.templ)]->grid;
+            if (!body) {
+                return heat::contact_patches(g, rec.point - p.x[k], n, rc);
+            }
+            const Quat inv = p.q[k].conjugate();
+            return heat::contact_patches(g, inv * (rec.point - p.x[k]), inv * n, rc);
+        };
         if (d.a.templ >= 0) {
-            const auto& g = *templates_[static_cast<std::size_t>(d.a.templ)]->grid;
-            d.patches_a = heat::contact_patches(g, rec.point - p.x[rec.i], rec.normal, rc);
+            d.patches_a = patches(d.a, rec.i, body_i, rec.normal);
         }
         if (!rec.wall && d.b.templ >= 0) {
-            const auto& g = *templates_[static_cast<std::size_t>(d.b.templ)]->grid;
-            d.patches_b = heat::contact_patches(g, rec.point - p.x[rec.j], -rec.normal, rc);
+            d.patches_b = patches(d.b, rec.j, body_j, -rec.normal);
         }
         // The capacity that answers a lagged contact rate within one step: the whole lumped
         // particle, or the cells under the contact of a resolved one (a conservative choice: the
@@ -628,6 +734,9 @@ std::vector<FieldView> ThermalSystem::fields(const dynamics::System& sys,
         v.spherical = t.spherical ? &t.res : nullptr;
         v.field = pool_.field(r.slot);
         v.position = p.x[i];
+        if (p.shape[i] >= 0) {
+            v.q = p.q[i];
+        }
         out.push_back(v);
     }
     std::sort(out.begin(), out.end(),

@@ -4,10 +4,16 @@
 // through lagged contact conduction (particle-particle and particle-wall), convection to a
 // prescribed ambient and a prescribed surface flux. Theory: docs/theory/heat.md, "Coupling".
 //
-// Frames: contacts come from System::collect_contacts in the world frame and are rotated into a
-// particle's body frame with its orientation before they reach the template grid. Spheres carry no
-// orientation in System today, so the rotation is the identity: a resolved sphere's field does not
-// turn with the sphere (documented limitation until System stores orientations).
+// Shapes: heat templates are keyed by (material, sphere radius) for spheres and by (material, shape
+// template) for bodies (clumps, superquadrics). Lumped bodies take volume and surface area from
+// their template; resolved bodies get the Cartesian cut-cell grid of their shape (superquadrics;
+// clumps and polyhedra: lumped only, resolved is an InputError).
+//
+// Frames: contacts come from System::collect_contacts in the world frame. For a body they are
+// rotated into its body frame with the inverse of its orientation q (body -> world) before they
+// reach the template grid, so its field turns with it. Spheres carry no orientation (q = identity
+// in ParticleStore): a resolved sphere's field does not turn with the sphere, which a sphere's
+// symmetry makes harmless except under the stagnation distribution of h.
 
 #include "dynamics/system.hpp"
 #include "heat/resolved_model.hpp"
@@ -16,6 +22,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace kiln::thermal {
@@ -39,7 +46,7 @@ struct MaterialChoice {
     heat::HeatModel used = heat::HeatModel::none;      ///< after the Biot test of "auto"
     double biot = 0;                                   ///< h L_c / k of the largest particle (-)
     int cells = 0;                                     ///< cells per particle (resolved) (-)
-    std::string grid;                                  ///< "spherical", "cartesian" or ""
+    std::string grid; ///< "spherical", "cartesian", both joined by '+' (spheres and bodies), or ""
 };
 
 /// Everything a checkpoint needs to continue the temperatures bit for bit.
@@ -64,7 +71,8 @@ struct FieldView {
     const heat::ThermalGrid* grid = nullptr;              ///< body-frame grid
     const heat::SphericalResolution* spherical = nullptr; ///< set for spherical grids
     std::span<const double> field;                        ///< cell temperatures (K)
-    Vec3 position = Vec3::Zero(); ///< centre (m, world); body frame = world axes (spheres)
+    Vec3 position = Vec3::Zero();                         ///< centre (m, world)
+    Quat q = Quat::Identity(); ///< body -> world rotation of the grid (identity for spheres)
 };
 
 /// The temperatures of a System and their coupling.
@@ -135,9 +143,12 @@ class ThermalSystem {
     struct ContactData;
 
     void sync(const dynamics::System& sys);
-    int template_for(int material, double radius);
+    int template_for(const dynamics::System& sys, std::size_t i);
     heat::ResolvedOperator& operator_for(Template& t, int substeps, int thread);
     [[nodiscard]] double capacity_of(const Record& r) const;
+    /// Volume (m^3) and surface area (m^2) of particle index i: its sphere or its shape template.
+    [[nodiscard]] std::pair<double, double> volume_area(const dynamics::System& sys,
+                                                        std::size_t i) const;
     [[nodiscard]] double patch_weight(const Template& t, int patch) const;
     [[nodiscard]] double patch_capacity(const Record& r, const std::vector<int>& patches) const;
     [[nodiscard]] double contact_temperature(const Record& r, const ContactData& c,
@@ -151,9 +162,11 @@ class ThermalSystem {
     std::vector<std::string> material_names_;
     std::vector<double> density_; // kg/m^3 per material
     std::vector<std::unique_ptr<Template>> templates_;
-    std::map<std::pair<int, std::uint64_t>, int> template_index_;
-    std::vector<Record> by_id_;  // indexed by particle id
-    std::vector<double> radius_; // by particle id (m)
+    // Key: (material, shape template or -1, radius bits of a sphere or 0).
+    std::map<std::tuple<int, int, std::uint64_t>, int> template_index_;
+    std::vector<double> shape_area_; // surface area per shape template of the scene (m^2)
+    std::vector<Record> by_id_;      // indexed by particle id
+    std::vector<double> radius_;     // by particle id (m)
     heat::TemperaturePool pool_;
     std::vector<int> pool_template_;      // template of each pool slot
     std::vector<double> lumped_;          // lumped temperatures (K)

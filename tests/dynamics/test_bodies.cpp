@@ -203,6 +203,50 @@ TEST(Bodies, MixedPourGivesTheSameBitsForOneAndTwoThreads) {
     EXPECT_EQ(a.narrow_phase_counters().failures, 0);
 }
 
+TEST(Bodies, CollectContactsListsBodyContactsWithBodyIndices) {
+    System sys(mixed_pour(1));
+    std::vector<ContactRecord> contacts;
+    long body_pairs = 0;
+    long body_walls = 0;
+    for (int k = 0; k < 6000; ++k) {
+        sys.step();
+        if (k % 200 != 199) {
+            continue;
+        }
+        sys.collect_contacts(contacts);
+        long pairs = 0;
+        long walls = 0;
+        const ParticleStore& p = sys.particles();
+        for (const ContactRecord& c : contacts) {
+            (c.wall ? walls : pairs) += 1;
+            ASSERT_LT(c.i, p.size());
+            EXPECT_GT(c.overlap, 0.0);
+            EXPECT_GT(c.r_eff, 0.0);
+            EXPECT_NEAR(c.normal.norm(), 1.0, 1e-12); // unit normal up to rounding
+            const bool body = p.shape[c.i] >= 0 || (!c.wall && p.shape[c.j] >= 0);
+            if (!body) {
+                continue;
+            }
+            (c.wall ? body_walls : body_pairs) += 1;
+            // The point lies within the bounding spheres (plus the overlap) and a wall normal
+            // points from the body towards the wall.
+            EXPECT_LE((c.point - p.x[c.i]).norm(), p.radius[c.i] + c.overlap);
+            if (!c.wall) {
+                ASSERT_LT(c.j, p.size());
+                EXPECT_LE((c.point - p.x[c.j]).norm(), p.radius[c.j] + c.overlap);
+                EXPECT_LT(p.id[c.i], p.id[c.j]); // records of bodies carry a = the smaller id
+            } else {
+                EXPECT_GT(c.normal.dot(c.point - p.x[c.i]), 0.0);
+            }
+        }
+        // Every element contact the force loop counted is listed once, and no other.
+        EXPECT_EQ(pairs, sys.counters().particle_contacts);
+        EXPECT_EQ(walls, sys.counters().wall_contacts);
+    }
+    EXPECT_GT(body_pairs, 0);
+    EXPECT_GT(body_walls, 0);
+}
+
 TEST(Bodies, PolyhedraNextToSuperquadricsAreNotYetSupported) {
     // Polyhedra run (tests/dynamics/test_polyhedra.cpp); their pair with a superquadric is not
     // wired.

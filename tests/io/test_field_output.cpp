@@ -1,6 +1,7 @@
 // Heat output read back with VTK's own readers: temperatures in the particle frames and the
 // intra-particle field files.
 #include "dynamics/system.hpp"
+#include "geometry/shape.hpp"
 #include "io/field_vtk.hpp"
 #include "io/vtk_writer.hpp"
 #include "thermal/thermal_system.hpp"
@@ -16,6 +17,7 @@
 
 #include <filesystem>
 #include <gtest/gtest.h>
+#include <numbers>
 
 namespace kiln::io {
 namespace {
@@ -76,6 +78,51 @@ TEST(HeatOutput, ParticleTemperaturesAndFieldsReadBack) {
     g->GetBounds(b);
     EXPECT_LE(b[1] - b[0], 2e-3 + 1e-12);
     EXPECT_TRUE(std::filesystem::exists(dir / "fields.pvd"));
+    std::filesystem::remove_all(dir);
+}
+
+TEST(HeatOutput, BodyFieldsAreWrittenTurnedByTheOrientation) {
+    const auto dir = std::filesystem::temp_directory_path() / "kiln_test_body_field_output";
+    std::filesystem::remove_all(dir);
+    dynamics::SceneSpec s;
+    s.materials.push_back({"a", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+    s.time_step = 1e-5;
+    s.gravity = Vec3::Zero();
+    geometry::Superquadric e; // 6 x 2 x 2 mm ellipsoid, long axis along body x
+    e.half_axes = Vec3(3e-3, 1e-3, 1e-3);
+    s.shapes.push_back(geometry::make_template("cigar", e));
+    dynamics::ParticleSpec p;
+    p.shape = 0;
+    p.x = Vec3(0.01, 0, 0);
+    // 90 degrees about z: body x -> world y.
+    p.orientation.fixed = Quat(Eigen::AngleAxisd(0.5 * std::numbers::pi, Vec3::UnitZ()));
+    s.particles.push_back(p);
+    dynamics::System sys(s);
+    thermal::HeatSpec h;
+    h.enabled = true;
+    thermal::MaterialHeat m;
+    m.enabled = true;
+    m.conductivity = 1;
+    m.specific_heat = 1000;
+    m.model = heat::HeatModel::resolved;
+    m.cells_across = 12;
+    h.materials = {m};
+    thermal::ThermalSystem heat(h, sys);
+    FieldSeriesWriter fields(dir, 0);
+    fields.write(sys, heat, {});
+
+    vtkNew<vtkXMLUnstructuredGridReader> fr;
+    fr->SetFileName((dir / "fields/fields_000000.vtu").string().c_str());
+    fr->Update();
+    double b[6];
+    fr->GetOutput()->GetBounds(b);
+    // The long axis lies along world y: extents 6 mm in y and 2 mm in x and z, up to the cubes
+    // drawn about the surface nodes (half a cell, 0.25 mm, on each side).
+    constexpr double cell_slack = 0.6e-3; // m
+    EXPECT_NEAR(b[3] - b[2], 6e-3, cell_slack);
+    EXPECT_NEAR(b[1] - b[0], 2e-3, cell_slack);
+    EXPECT_NEAR(b[5] - b[4], 2e-3, cell_slack);
+    EXPECT_NEAR(0.5 * (b[0] + b[1]), 0.01, 1e-9); // centred on the body, world position
     std::filesystem::remove_all(dir);
 }
 

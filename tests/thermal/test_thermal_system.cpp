@@ -1,5 +1,7 @@
 #include "core/error.hpp"
 #include "dynamics/system.hpp"
+#include "geometry/clump.hpp"
+#include "geometry/shape_metrics.hpp"
 #include "thermal/thermal_system.hpp"
 
 #include <cmath>
@@ -8,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <numbers>
 #include <string>
+#include <tuple>
 
 namespace kiln::thermal {
 namespace {
@@ -397,6 +400,179 @@ TEST(ThermalSystem, ExtremesStayBoundedAndBalanced) {
         // Balance: stored heat change = what came from outside, to solver tolerance.
         EXPECT_NEAR(heat.thermal_energy() - e0, heat.external_heat(), 1e-8 * e0) << label;
     }
+}
+
+// ---- Non-spherical particles (clumps, superquadrics) ------------------------------------------
+
+/// Two equal bodies of `shape` squeezed along world x between two planes without gravity, each
+/// turned by `q` (body -> world); `reach` is how far a body extends from its centre along world
+/// x. Equal curvature at the pair and wall contacts: the pair overlap is 2^(1/3) times the wall
+/// overlap, as for the spheres above.
+dynamics::SceneSpec squeezed_bodies(const geometry::ShapeTemplate& shape, double reach,
+                                    const Quat& q, double wall_overlap) {
+    dynamics::SceneSpec s;
+    s.materials.push_back({"a", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+    s.gravity = Vec3::Zero();
+    s.time_step = 1e-5;
+    s.shapes.push_back(shape);
+    const double pair_overlap = std::cbrt(2.0) * wall_overlap;
+    const double l = 2.0 * reach - 0.5 * pair_overlap - wall_overlap;
+    s.walls.push_back({"left", dynamics::PlaneWall{Vec3(-l, 0, 0), Vec3::UnitX()}, 0});
+    s.walls.push_back({"right", dynamics::PlaneWall{Vec3(l, 0, 0), -Vec3::UnitX()}, 0});
+    const double x = reach - 0.5 * pair_overlap;
+    for (const double sign : {-1.0, 1.0}) {
+        dynamics::ParticleSpec p;
+        p.shape = 0;
+        p.x = Vec3(sign * x, 0, 0);
+        p.orientation.fixed = q;
+        s.particles.push_back(p);
+    }
+    return s;
+}
+
+geometry::ShapeTemplate ellipsoid(const Vec3& half_axes) {
+    geometry::Superquadric q;
+    q.half_axes = half_axes;
+    return geometry::make_template("ellipsoid", q);
+}
+
+/// Dumbbell of two overlapping spheres of radius `r` along body z.
+geometry::ShapeTemplate dumbbell(double r) {
+    return geometry::make_template(
+        "dumbbell",
+        geometry::make_clump({{Vec3(0, 0, -0.8 * r), r}, {Vec3(0, 0, 0.8 * r), r}}, "test"));
+}
+
+/// Runs `steps` mechanical steps with heat; returns the largest relative drift of sum C T.
+double run_and_track(dynamics::System& sys, ThermalSystem& heat, int steps) {
+    const double e0 = heat.thermal_energy();
+    double drift = 0.0;
+    for (int k = 0; k < steps; ++k) {
+        sys.step();
+        if (heat.after_step(sys)) {
+            drift = std::max(drift, std::abs(heat.thermal_energy() - e0) / e0);
+        }
+    }
+    return drift;
+}
+
+class BodyPairHeat : public ::testing::TestWithParam<std::tuple<int, heat::HeatModel>> {};
+
+TEST_P(BodyPairHeat, ExchangesHeatConservatively) {
+    const auto [kind, model] = GetParam();
+    const double r = 1.5e-3;
+    // kind 0: oblate 1.5 x 2.5 x 2.5 mm ellipsoids pressed along their short axis (a stable
+    // stack); kind 1: dumbbell clumps side by side (two element contacts per pair and per wall).
+    const dynamics::SceneSpec s =
+        kind == 0 ? squeezed_bodies(ellipsoid(Vec3(r, 2.5e-3, 2.5e-3)), r, Quat::Identity(), 2e-5)
+                  : squeezed_bodies(dumbbell(r), r, Quat::Identity(), 2e-5);
+    dynamics::System sys(s);
+    ThermalSystem heat(heat_for(s, model, 50.0), sys);
+    // The capacity is m c_p of the bodies: exact for lumped (template volume and density); the
+    // cut-cell grid's volume converges to the shape's (10 cells across: within 1 %).
+    const double mass = sys.particles().mass[0] + sys.particles().mass[1];
+    const double capacity_tolerance = model == heat::HeatModel::lumped ? 1e-12 : 1e-2;
+    EXPECT_NEAR(heat.heat_capacity(), 900.0 * mass, capacity_tolerance * 900.0 * mass);
+    const double drift = run_and_track(sys, heat, 20000);
+    EXPECT_GT(heat.counters().thermal_steps, 100);
+    // The pair keeps touching (the adiabatic walls do not conduct, so are not counted): one
+    // contact per thermal step for the ellipsoids, two member contacts for the dumbbells (5 %
+    // allowed for the first steps while the squeeze settles).
+    const double per_step = kind == 0 ? 1.0 : 2.0;
+    EXPECT_GE(static_cast<double>(heat.counters().contacts),
+              0.95 * per_step * static_cast<double>(heat.counters().thermal_steps));
+    // Lumped: antisymmetric exchange, rounding only; resolved: the CG residual 1e-12 of
+    // ||b|| ~ C T / dt per solve over ~400 solves.
+    EXPECT_LT(drift, model == heat::HeatModel::lumped ? 1e-13 : 1e-9);
+    EXPECT_EQ(heat.external_heat(), model == heat::HeatModel::lumped ? 0.0 : heat.external_heat());
+    ParticleTemperatures t;
+    heat.particle_temperatures(sys, t);
+    const std::size_t hot = sys.particles().id[0] == 0 ? 0 : 1;
+    std::printf("  %s %s: drift %.2e, mean T %.3f K and %.3f K\n",
+                kind == 0 ? "ellipsoids" : "clumps", std::string(heat::to_string(model)).c_str(),
+                drift, t.mean[hot], t.mean[1 - hot]);
+    EXPECT_LT(t.mean[hot], 599.0); // real heat flowed (> 1 K of 300 K)
+    EXPECT_GT(t.mean[1 - hot], 301.0);
+}
+
+// Resolved clumps are refused (RefusesResolvedClumpsAndKeepsLumpedOnes), so three combinations.
+INSTANTIATE_TEST_SUITE_P(Shapes, BodyPairHeat,
+                         ::testing::Values(std::make_tuple(0, heat::HeatModel::lumped),
+                                           std::make_tuple(0, heat::HeatModel::resolved),
+                                           std::make_tuple(1, heat::HeatModel::lumped)),
+                         [](const auto& p) {
+                             return std::string(std::get<0>(p.param) == 0 ? "ellipsoids_"
+                                                                          : "clumps_") +
+                                    std::string(heat::to_string(std::get<1>(p.param)));
+                         });
+
+TEST(ThermalSystem, RotatedResolvedEllipsoidTakesWallHeatOnTheFacingPatches) {
+    // Oblate ellipsoids, short axis along body z, turned onto world x (90 degrees about y): the
+    // left body meets the hot left wall with its body -z pole. Without the rotation into the body
+    // frame the heat would land on the body -x side.
+    const double c = 1.5e-3;
+    const Quat q(Eigen::AngleAxisd(0.5 * std::numbers::pi, Vec3::UnitY()));
+    const dynamics::SceneSpec s = squeezed_bodies(ellipsoid(Vec3(2.5e-3, 2.5e-3, c)), c, q, 2e-5);
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::resolved, 1.0);
+    h.particle_temperature = {300.0, 300.0};
+    h.wall_temperature = {600.0, unset};
+    ThermalSystem heat(h, sys);
+    run_and_track(sys, heat, 20000);
+    const std::vector<FieldView> views = heat.fields(sys, {0});
+    ASSERT_EQ(views.size(), 1U);
+    const FieldView& v = views[0];
+    EXPECT_TRUE(v.q.isApprox(q, 1e-6)); // the grid turns with the body (it barely rotates here)
+    int hottest = 0;
+    for (int k = 1; k < v.grid->size(); ++k) {
+        if (v.field[static_cast<std::size_t>(k)] > v.field[static_cast<std::size_t>(hottest)]) {
+            hottest = k;
+        }
+    }
+    const Vec3 node = v.grid->node[static_cast<std::size_t>(hottest)];
+    EXPECT_GT(v.field[static_cast<std::size_t>(hottest)], 301.0); // the wall did heat it
+    // Body frame: the hottest cell sits at the -z tip (within the outer half of the semi-axis).
+    EXPECT_LT(node.z(), -0.5 * c);
+    // World frame: that cell faces the left wall.
+    EXPECT_LT((v.q * node).x(), -0.5 * c);
+}
+
+TEST(ThermalSystem, RefusesResolvedClumpsAndKeepsLumpedOnes) {
+    const dynamics::SceneSpec s = squeezed_bodies(dumbbell(1.5e-3), 1.5e-3, Quat::Identity(), 2e-5);
+    dynamics::System sys(s);
+    try {
+        ThermalSystem heat(heat_for(s, heat::HeatModel::resolved, 1.0), sys);
+        FAIL() << "resolved clumps must be refused";
+    } catch (const InputError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("resolved heat for clump/polyhedron templates: not yet"),
+                  std::string::npos)
+            << what;
+        EXPECT_NE(what.find("dumbbell"), std::string::npos) << what;
+        EXPECT_NE(what.find("particle 0"), std::string::npos) << what;
+    }
+    EXPECT_NO_THROW(ThermalSystem(heat_for(s, heat::HeatModel::lumped, 1.0), sys));
+}
+
+TEST(ThermalSystem, AutoUsesVolumeOverAreaOfTheTemplate) {
+    // A flat 4 x 4 x 0.5 mm superquadric box-like plate: V / A is far below that of its bounding
+    // sphere, so "auto" keeps it lumped where the bounding-sphere radius would resolve it.
+    geometry::Superquadric plate;
+    plate.half_axes = Vec3(2e-3, 2e-3, 0.25e-3);
+    plate.e1 = 0.2;
+    plate.e2 = 0.2;
+    const geometry::ShapeTemplate t = geometry::make_template("plate", plate);
+    const dynamics::SceneSpec s = squeezed_bodies(t, 2e-3, Quat::Identity(), 2e-5);
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::automatic, 1.0);
+    h.heat_transfer_coefficient = 400.0;
+    ThermalSystem heat(h, sys);
+    const double area = geometry::surface_area(t.shape).value;
+    // Bi = h (V / A) / k exactly as computed from the template.
+    EXPECT_NEAR(heat.choices()[0].biot, 400.0 * t.volume / area / 1.0, 1e-12);
+    EXPECT_EQ(heat.choices()[0].used, heat::HeatModel::lumped);
+    // Its bounding sphere (r = 2 mm) would give h r / (3 k) = 0.27 > 0.1: resolved.
+    EXPECT_GT(400.0 * 2e-3 / 3.0, h.biot_threshold);
 }
 
 } // namespace
