@@ -45,7 +45,8 @@ struct ContactRecord {
     std::uint32_t i = 0;         ///< particle index (current ordering of the store)
     std::uint32_t j = 0;         ///< partner particle index, or wall index when `wall`
     bool wall = false;           ///< true for a particle-wall contact
-    Vec3 point = Vec3::Zero();   ///< contact point (m, world): middle of the overlap along n
+    Vec3 point = Vec3::Zero();   ///< contact point (m, world): spheres: middle of the overlap
+                                 ///< along n; bodies: the narrow phase's point of the element pair
     Vec3 normal = Vec3::UnitZ(); ///< unit normal from i towards its partner (world)
     double overlap = 0;          ///< normal overlap delta > 0 (m)
     double r_eff = 0;            ///< effective radius of curvature R* (m)
