@@ -746,6 +746,8 @@ void System::collect_contacts(std::vector<ContactRecord>& out) const {
     if (!has_bodies_) {
         return;
     }
+    // Contacts with mesh walls carry the wall index walls.size() + mesh index (the key order of
+    // body contacts), so `j` of such a record is not an index into spec_.walls.
     // Element contacts of bodies from the last force evaluation, in key order (ids, elements):
     // one record per touching element pair, carrying the body (particle) index. Their normal runs
     // from b to a; a record's normal runs from i = a to its partner, hence the sign change.

@@ -416,6 +416,9 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
         int mat_j = 0;
         double rj = 0.0;
         if (rec.wall) {
+            if (rec.j >= spec_.wall_temperature.size()) {
+                continue; // a mesh wall (indices after the analytic walls): adiabatic for now
+            }
             d.wall_temperature = spec_.wall_temperature[rec.j];
             if (std::isnan(d.wall_temperature)) {
                 continue;

@@ -3,10 +3,12 @@
 // (geometry::support_newton_contact) and the radius from the contact curvature
 // (geometry::contact_curvature), against Hertz theory (Johnson 1985, Contact Mechanics, Sec. 11.1)
 // in the setting of validation 01 (R = 10 mm, E = 48 GPa, nu = 0.2, 2800 kg/m^3, 10 m/s).
-// System does not run superquadrics yet, so the check integrates the two bodies itself (velocity
-// Verlet along the line of centres, the Hertz force written out here); it validates the geometry
-// that a contact law will receive, not System.
+// Two checks: (1) the geometry alone, integrated here (velocity Verlet along the line of centres,
+// the Hertz force written out): what a contact law receives; (2) the same impact run by System with
+// the two bodies as superquadric particles (validation 01's case with the spheres replaced), which
+// adds the body path of the step loop (element contacts, local radius, rotation).
 
+#include "dynamics/system.hpp"
 #include "geometry/convex_contact.hpp"
 #include "validation.hpp"
 
@@ -137,6 +139,71 @@ TEST(SuperquadricSphereImpact, MatchesHertzTheory) {
                1.0 / kRadius, 0.0, "1/m");
         EXPECT_TRUE(e < 1.0 ? k[1] == 0.0 : std::isinf(k[0]));
     }
+}
+
+/// Validation 01's scene (two 10 mm spheres closing at 10 m/s, elastic, frictionless) with each
+/// sphere replaced by a superquadric particle of equal half-axes, e1 = e2 = 1, random orientation.
+dynamics::SceneSpec superquadric_scene() {
+    const io::CaseSpec spec =
+        io::read_case_file(std::string(KILN_CASE_DIR) + "/../01_hertz_impact/case.toml");
+    dynamics::SceneSpec scene = spec.scene;
+    geometry::Superquadric s;
+    s.half_axes = Vec3::Constant(kRadius);
+    scene.shapes.push_back(geometry::make_template("sphere_sq", s));
+    for (dynamics::ParticleSpec& p : scene.particles) {
+        p.shape = 0;
+        p.radius = scene.shapes[0].bounding_radius();
+        p.orientation.random = true;
+    }
+    return scene;
+}
+
+TEST(SuperquadricSphereImpact, InSystemMatchesHertzTheory) {
+    const dynamics::SceneSpec scene = superquadric_scene();
+    ASSERT_EQ(scene.particles.size(), 2U);
+    const double m_star = 0.5 * kDensity * 4.0 / 3.0 * std::numbers::pi * std::pow(kRadius, 3);
+    const double r_star = 0.5 * kRadius;
+    const double speed = (scene.particles[0].v - scene.particles[1].v).norm();
+    const double delta =
+        std::pow(15.0 * m_star * speed * speed / (16.0 * e_star() * std::sqrt(r_star)), 0.4);
+    const double force = 4.0 / 3.0 * e_star() * std::sqrt(r_star) * std::pow(delta, 1.5);
+    const double time =
+        2.0 * 0.4 * std::tgamma(0.4) * std::tgamma(0.5) / std::tgamma(0.9) * delta / speed;
+
+    dynamics::System sys(scene);
+    ASSERT_GE(sys.particles().shape[0], 0); // really bodies, not the sphere path
+    const auto overlap = [&] {
+        const ParticleStore& p = sys.particles();
+        return 2.0 * kRadius - (p.x[0] - p.x[1]).norm();
+    };
+    double delta_max = 0.0;
+    double force_max = 0.0;
+    double t_start = -1.0;
+    double t_end = -1.0;
+    double prev_t = sys.time();
+    double prev_d = overlap();
+    while (sys.time() < 1e-4 && t_end < 0.0) {
+        sys.step();
+        const double d = overlap();
+        delta_max = std::max(delta_max, d);
+        force_max = std::max(force_max, sys.particles().force[0].norm());
+        if (prev_d <= 0.0 && d > 0.0) {
+            t_start = prev_t + (sys.time() - prev_t) * (-prev_d) / (d - prev_d);
+        } else if (prev_d > 0.0 && d <= 0.0) {
+            t_end = prev_t + (sys.time() - prev_t) * (-prev_d) / (d - prev_d);
+        }
+        prev_t = sys.time();
+        prev_d = d;
+    }
+    ASSERT_GE(t_start, 0.0) << "no contact within 1e-4 s";
+    ASSERT_GT(t_end, t_start) << "the contact did not end within 1e-4 s";
+    record("System: max overlap", delta_max, delta, hertz_tolerance, "m");
+    record("System: max force", force_max, force, hertz_tolerance, "N");
+    record("System: contact time", t_end - t_start, time, hertz_tolerance, "s");
+    EXPECT_NEAR(delta_max / delta, 1.0, hertz_tolerance);
+    EXPECT_NEAR(force_max / force, 1.0, hertz_tolerance);
+    EXPECT_NEAR((t_end - t_start) / time, 1.0, hertz_tolerance);
+    EXPECT_EQ(sys.narrow_phase_counters().failures, 0);
 }
 
 } // namespace
