@@ -178,6 +178,7 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
                    monitors.rows());
     }
     const auto t0 = std::chrono::steady_clock::now();
+    double heat_wall = 0.0; // s spent in thermal steps (the clock is read only when heat is on)
     int code = 0;
     const StopHandlers handlers;
     bool interrupted = false;
@@ -189,7 +190,10 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
             }
             sys->step();
             if (heat) {
+                const auto h0 = std::chrono::steady_clock::now();
                 heat->after_step(*sys);
+                heat_wall +=
+                    std::chrono::duration<double>(std::chrono::steady_clock::now() - h0).count();
             }
             const long s = sys->step_count();
             if (s % finite_check_every == 0) {
@@ -230,6 +234,7 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
     summary.particles = static_cast<long>(sys->particles().size());
     summary.simulated_time = sys->time();
     summary.wall_seconds = wall;
+    summary.heat_wall_seconds = heat_wall;
     summary.particle_steps_per_second =
         wall > 0.0
             ? static_cast<double>(summary.steps) * static_cast<double>(summary.particles) / wall

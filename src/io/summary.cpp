@@ -66,6 +66,7 @@ void write_summary_json(const std::filesystem::path& file, const RunSummary& s) 
     field("simulated_time", json_number(s.simulated_time));
     field("wall_seconds", json_number(s.wall_seconds));
     field("particle_steps_per_second", json_number(s.particle_steps_per_second));
+    field("heat_wall_seconds", json_number(s.heat_wall_seconds));
     field("neighbour_builds", fmt::format("{}", s.neighbour_builds));
     field("bodies", fmt::format("{}", s.bodies));
     field("narrow_phase_calls", fmt::format("{}", s.narrow_phase_calls));

@@ -19,6 +19,7 @@ struct RunSummary {
     double simulated_time = 0;            ///< simulated time at the end (s)
     double wall_seconds = 0;              ///< wall-clock time of the stepping loop (s)
     double particle_steps_per_second = 0; ///< steps * particles / wall_seconds (1/s)
+    double heat_wall_seconds = 0;         ///< part of wall_seconds spent in thermal steps (s)
     long neighbour_builds = 0;            ///< neighbour-list builds (-)
     std::vector<std::string> warnings;    ///< set-up warnings
     std::vector<std::pair<std::string, double>> final_monitors; ///< monitors at the end (SI)

@@ -424,6 +424,7 @@ TEST(Summary, JsonIsValidAndEscapesStrings) {
     s.simulated_time = 1e-3;
     s.wall_seconds = std::numeric_limits<double>::quiet_NaN();
     s.particle_steps_per_second = 1.5e6;
+    s.heat_wall_seconds = 0.25;
     s.warnings = {"first", "second \"one\""};
     s.final_monitors = {{"time", 1e-3}, {"max_velocity", std::numeric_limits<double>::infinity()}};
     s.status = "completed";
@@ -433,6 +434,7 @@ TEST(Summary, JsonIsValidAndEscapesStrings) {
     const std::string json = read_text(file);
     EXPECT_TRUE(JsonChecker(json).valid()) << json;
     EXPECT_NE(json.find("\"particle_steps_per_second\": 1500000"), std::string::npos) << json;
+    EXPECT_NE(json.find("\"heat_wall_seconds\": 0.25"), std::string::npos) << json;
     EXPECT_NE(json.find(R"("case_name": "a \"quoted\" name\\ with\ttab\nand \u0001")"),
               std::string::npos)
         << json;
