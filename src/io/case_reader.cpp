@@ -812,6 +812,9 @@ void read_heat(Section& root, CaseSpec& c, const toml::table& doc) {
                            ? thermal::ContactRadius::hertz
                            : thermal::ContactRadius::lens;
     h.max_substeps = static_cast<int>(s.integer("max_substeps", 1024, 1, 1'000'000));
+    h.gas.conductivity = s.real("gas_conductivity", 0.0, non_negative(), "W/(m K)");
+    h.gas.porosity = s.real("gas_porosity", 0.4, Range{0.0, 1.0, false, false}, "-");
+    h.gas.cutoff = s.real("gas_cutoff", 0.5, positive(), "-");
     h.field_output = s.boolean("field_output", false);
     if (const toml::node* n = s.take("field_particles")) {
         const toml::array* a = n->as_array();

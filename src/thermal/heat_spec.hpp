@@ -4,6 +4,7 @@
 // filled in. A scene without heat has `enabled == false` and costs nothing.
 
 #include "core/types.hpp"
+#include "heat/gas_conduction.hpp"
 #include "heat/heat_model.hpp"
 #include "heat/resolved_model.hpp"
 #include "heat/spherical_grid.hpp"
@@ -52,6 +53,8 @@ struct HeatSpec {
     double biot_threshold = 0.1;         ///< model "auto": lumped below this Biot number (-)
     ContactRadius contact_radius = ContactRadius::hertz; ///< contact-radius rule
     int max_substeps = 1024; ///< most sub-steps per thermal step allowed by the lag limit (-)
+    /// Gas in the gaps between spheres (Cheng et al. 1999); conductivity 0 = none.
+    heat::GasGap gas;
     std::vector<MaterialHeat> materials; ///< one per material of the scene, same order
     /// Temperature of each wall of the scene (K); NaN = adiabatic (no contact conduction).
     std::vector<double> wall_temperature;

@@ -153,6 +153,10 @@ class ThermalSystem {
     [[nodiscard]] double patch_capacity(const Record& r, const std::vector<int>& patches) const;
     [[nodiscard]] double contact_temperature(const Record& r, const ContactData& c,
                                              bool side_j) const;
+    /// Appends the gas-gap (particle-fluid-particle) exchange of every heated sphere pair within
+    /// the cut-off to data_, adding its conductances to `g_sum` (W/K, by particle index) and its
+    /// pair rate to `worst` (1/s) for the lag limit. Nothing without gas.
+    void add_gas_gaps(const dynamics::System& sys, std::vector<double>& g_sum, double& worst);
 
     HeatSpec spec_;
     double dt_ = 0;
@@ -181,6 +185,8 @@ class ThermalSystem {
     double external_heat_ = 0;
     ThermalCounters counters_;
     std::vector<std::string> warnings_;
+    long gas_pairs_ =
+        0; // gas-gap pairs summed over this process's thermal steps (not checkpointed)
     bool warned_lag_ = false;
     bool warned_solver_ = false;
 };
