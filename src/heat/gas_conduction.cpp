@@ -111,9 +111,9 @@ double gas_gap_conductance(double r_i, double r_j, double distance, double k_i, 
         const double l_gas = std::max(0.0, 2.0 * (a - z));      // between the surfaces
         return 2.0 * std::numbers::pi * r / (l_solid * solid + l_gas * inv_kf);
     };
-    // A first estimate on 64 panels sets the absolute tolerance; the peak of the integrand near
+    // A first estimate on 16 panels sets the absolute tolerance; the peak of the integrand near
     // the axis of a nearly touching pair (width ~ sqrt(R k_f / k_s) R) is then refined adaptively.
-    constexpr int panels = 64;
+    constexpr int panels = 16;
     const double h = (r_sf - r_lo) / panels;
     std::array<double, 2 * panels + 1> fv{};
     for (int k = 0; k <= 2 * panels; ++k) {
