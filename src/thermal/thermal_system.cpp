@@ -6,6 +6,7 @@
 #include "heat/contact_conduction.hpp"
 #include "heat/convection.hpp"
 #include "heat/gas_conduction.hpp"
+#include "heat/radiation.hpp"
 #include "heat/shape.hpp"
 
 #include <algorithm>
@@ -88,6 +89,7 @@ struct ThermalSystem::ContactData {
     double conductance = 0;      // H (W/K)
     double wall_temperature = 0; // K, walls only
     bool wall = false;
+    bool radiative = false;     // conductance holds K (W/K^4): rate K (T_j^4 - T_i^4)
     std::vector<int> patches_a; // boundary patches of i under the contact (resolved)
     std::vector<int> patches_b; // of j
 };
@@ -179,7 +181,19 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
                 mats[m].name, where));
         }
     }
-    // Gas-gap conduction is a sphere-pair model (Cheng et al. 1999): refuse heated bodies.
+    // Gas-gap conduction is a sphere-pair model (Cheng et al. 1999): refuse heated bodies. The
+    // radiation view factor is a sphere estimate: refuse bodies of a material with an emissivity.
+    for (const auto& [material, shape, where] : kinds) {
+        const MaterialHeat& mh = spec_.materials[static_cast<std::size_t>(material)];
+        if (shape >= 0 && mh.enabled && mh.emissivity > 0.0) {
+            throw InputError(fmt::format(
+                "heat: material \"{}\" has an emissivity and non-spherical particles (shape "
+                "\"{}\", {}): radiation for non-spherical shapes: not yet (the view factor is a "
+                "sphere estimate; set emissivity = 0 or use spheres)",
+                mats[static_cast<std::size_t>(material)].name,
+                sys.spec().shapes[static_cast<std::size_t>(shape)].name, where));
+        }
+    }
     if (spec_.gas.conductivity > 0.0) {
         for (const auto& [material, shape, where] : kinds) {
             if (shape >= 0 && spec_.materials[static_cast<std::size_t>(material)].enabled) {
@@ -384,7 +398,7 @@ double ThermalSystem::contact_temperature(const Record& r, const ContactData& c,
     const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
     const std::span<const double> f = pool_.field(r.slot);
     const std::vector<int>& patches = side_b ? c.patches_b : c.patches_a;
-    if (t.spherical) {
+    if (t.spherical && !c.radiative) {
         // The seed's undisturbed temperature (Inv. V L1965) along the rows under the contact.
         return heat::undisturbed_temperature(*t.grid, t.res, f, patches);
     }
@@ -500,6 +514,7 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
         data_.push_back(std::move(d));
     }
     add_gas_gaps(sys, g_sum, worst);
+    add_radiation(sys, g_sum, worst);
     for (std::size_t i = 0; i < p.size(); ++i) {
         if (g_sum[i] > 0.0) {
             const Record& r = by_id_[static_cast<std::size_t>(p.id[i])];
@@ -560,7 +575,8 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
         for (const ContactData& d : data_) {
             const double ta = contact_temperature(d.a, d, false);
             const double tb = d.wall ? d.wall_temperature : contact_temperature(d.b, d, true);
-            const double q = d.conductance * (tb - ta); // into i
+            const double q = d.radiative ? d.conductance * (tb * tb * tb * tb - ta * ta * ta * ta)
+                                         : d.conductance * (tb - ta); // into i
             add(d.a, d.patches_a, q);
             if (d.wall) {
                 external_heat_ += q * dt_sub;
@@ -691,6 +707,60 @@ void ThermalSystem::add_gas_gaps(const dynamics::System& sys, std::vector<double
         ++pairs;
     }
     gas_pairs_ += pairs;
+}
+
+void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<double>& g_sum,
+                                  double& worst) {
+    const ParticleStore& p = sys.particles();
+    const auto emissivity = [&](const Record& rec) {
+        return spec_.materials[static_cast<std::size_t>(rec.material)].emissivity;
+    };
+    // Heated spheres with an emissivity (others radius 0: left out of the search).
+    std::vector<double> r(p.size(), 0.0);
+    bool any = false;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        const Record& rec = by_id_[static_cast<std::size_t>(p.id[i])];
+        if (p.shape[i] < 0 && rec.slot >= 0 && emissivity(rec) > 0.0) {
+            r[i] = p.radius[i];
+            any = true;
+        }
+    }
+    if (!any) {
+        return;
+    }
+    long pairs = 0;
+    for (const heat::NearPair& np : heat::near_sphere_pairs(p.x, r, spec_.radiation_cutoff)) {
+        ContactData d;
+        d.radiative = true;
+        d.a = by_id_[static_cast<std::size_t>(p.id[np.i])];
+        d.b = by_id_[static_cast<std::size_t>(p.id[np.j])];
+        const Vec3 between = p.x[np.j] - p.x[np.i];
+        const double s = between.norm();
+        // Overlapping (touching) spheres radiate as if just touching.
+        d.conductance = heat::radiative_coefficient(
+            r[np.i], r[np.j], std::max(s, r[np.i] + r[np.j]), emissivity(d.a), emissivity(d.b));
+        // Resolved spheres exchange over the hemisphere facing the partner (world axes = body
+        // frame for spheres): its area-weighted cell temperature, and the heat spread over it.
+        const Vec3 n = between / s;
+        if (d.a.templ >= 0) {
+            d.patches_a = heat::contact_patches(
+                *templates_[static_cast<std::size_t>(d.a.templ)]->grid, r[np.i] * n, n, r[np.i]);
+        }
+        if (d.b.templ >= 0) {
+            d.patches_b = heat::contact_patches(
+                *templates_[static_cast<std::size_t>(d.b.templ)]->grid, -r[np.j] * n, -n, r[np.j]);
+        }
+        // Lag limit with the linearised conductance at the hotter side's current temperature.
+        const double g = heat::radiative_conductance_bound(
+            d.conductance, contact_temperature(d.a, d, false), contact_temperature(d.b, d, true));
+        g_sum[np.i] += g;
+        g_sum[np.j] += g;
+        worst = std::max(worst, g / patch_capacity(d.a, d.patches_a) +
+                                    g / patch_capacity(d.b, d.patches_b));
+        data_.push_back(std::move(d));
+        ++pairs;
+    }
+    radiation_pairs_ += pairs;
 }
 
 void ThermalSystem::particle_temperatures(const dynamics::System& sys,
@@ -914,6 +984,7 @@ std::string ThermalSystem::summary_json() const {
     j += fmt::format("    \"unconverged_solves\": {},\n", k.unconverged);
     j += fmt::format("    \"conducting_contacts\": {},\n", k.contacts);
     j += fmt::format("    \"gas_gap_pairs\": {},\n", gas_pairs_);
+    j += fmt::format("    \"radiation_pairs\": {},\n", radiation_pairs_);
     j += fmt::format("    \"thermal_energy\": {},\n", num(thermal_energy()));
     j += fmt::format("    \"external_heat\": {}\n", num(external_heat_));
     j += "  }";

@@ -174,6 +174,22 @@ TEST(CaseReaderHeat, GasGapKeysReadWithDefaultsAndRanges) {
     EXPECT_NE(e.find("heat.gas_cutoff"), std::string::npos) << e;
 }
 
+TEST(CaseReaderHeat, RadiationKeysReadWithDefaultsAndRanges) {
+    const CaseSpec d = read_case_text(base, "case.toml");
+    EXPECT_DOUBLE_EQ(d.heat.materials[0].emissivity, 0.0); // default: no radiation
+    EXPECT_DOUBLE_EQ(d.heat.radiation_cutoff, 0.5);        // seed: neighbours within R
+    const CaseSpec c = read_case_text(
+        edit("radial_cells = 6", "radial_cells = 6\nemissivity = 0.85"), "case.toml");
+    EXPECT_DOUBLE_EQ(c.heat.materials[0].emissivity, 0.85);
+    std::string e = error_of(edit("radial_cells = 6", "radial_cells = 6\nemissivity = 1.2"));
+    EXPECT_NE(e.find("material[0].heat.emissivity: 1.2 is out of range"), std::string::npos) << e;
+    e = error_of(edit("step_multiple = 50", "step_multiple = 50\nradiation_cutoff = -1"));
+    EXPECT_NE(e.find("heat.radiation_cutoff"), std::string::npos) << e;
+    const CaseSpec r = read_case_text(
+        edit("step_multiple = 50", "step_multiple = 50\nradiation_cutoff = 2"), "case.toml");
+    EXPECT_DOUBLE_EQ(r.heat.radiation_cutoff, 2.0);
+}
+
 TEST(CaseReaderHeat, HotWallNeedsAMaterialWithConductivity) {
     const std::string e = error_of(edit("material = \"glass\"\nmin", "material = \"steel\"\nmin"));
     EXPECT_NE(e.find("wall[0].temperature"), std::string::npos) << e;
