@@ -450,6 +450,7 @@ thermal::MaterialHeat read_material_heat(Section& s, const Material& m) {
     h.spherical.n_phi = static_cast<int>(r.integer("azimuthal_cells", 16, 3, 1000));
     h.cells_across = static_cast<int>(r.integer("cells_across", 10, 2, 1000));
     h.real_youngs_modulus = r.real("real_youngs_modulus", m.youngs_modulus, positive(), "Pa");
+    h.emissivity = r.real("emissivity", 0.0, Range{0.0, 1.0, true, true}, "-");
     r.finish();
     s.out().insert_or_assign("heat", std::move(out_t));
     return h;
@@ -812,6 +813,10 @@ void read_heat(Section& root, CaseSpec& c, const toml::table& doc) {
                            ? thermal::ContactRadius::hertz
                            : thermal::ContactRadius::lens;
     h.max_substeps = static_cast<int>(s.integer("max_substeps", 1024, 1, 1'000'000));
+    h.gas.conductivity = s.real("gas_conductivity", 0.0, non_negative(), "W/(m K)");
+    h.gas.porosity = s.real("gas_porosity", 0.4, Range{0.0, 1.0, false, false}, "-");
+    h.gas.cutoff = s.real("gas_cutoff", 0.5, positive(), "-");
+    h.radiation_cutoff = s.real("radiation_cutoff", 0.5, positive(), "-");
     h.field_output = s.boolean("field_output", false);
     if (const toml::node* n = s.take("field_particles")) {
         const toml::array* a = n->as_array();

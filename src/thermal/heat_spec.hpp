@@ -4,6 +4,7 @@
 // filled in. A scene without heat has `enabled == false` and costs nothing.
 
 #include "core/types.hpp"
+#include "heat/gas_conduction.hpp"
 #include "heat/heat_model.hpp"
 #include "heat/resolved_model.hpp"
 #include "heat/spherical_grid.hpp"
@@ -37,6 +38,7 @@ struct MaterialHeat {
     int cells_across = 10;                           ///< Cartesian cells across the diameter (-)
     double real_youngs_modulus = 0; ///< E_real (Pa) for the contact-radius correction
                                     ///< c = (E_sim / E_real)^(1/5); 0 = c = 1
+    double emissivity = 0;          ///< grey emissivity of the surface for radiation (-); 0 = none
 };
 
 /// The heat coupling of a run.
@@ -52,6 +54,10 @@ struct HeatSpec {
     double biot_threshold = 0.1;         ///< model "auto": lumped below this Biot number (-)
     ContactRadius contact_radius = ContactRadius::hertz; ///< contact-radius rule
     int max_substeps = 1024; ///< most sub-steps per thermal step allowed by the lag limit (-)
+    /// Gas in the gaps between spheres (Cheng et al. 1999); conductivity 0 = none.
+    heat::GasGap gas;
+    /// Largest H/R (H half the surface gap) at which neighbouring spheres exchange radiation (-).
+    double radiation_cutoff = 0.5;
     std::vector<MaterialHeat> materials; ///< one per material of the scene, same order
     /// Temperature of each wall of the scene (K); NaN = adiabatic (no contact conduction).
     std::vector<double> wall_temperature;

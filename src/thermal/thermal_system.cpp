@@ -5,6 +5,8 @@
 #include "heat/cartesian_grid.hpp"
 #include "heat/contact_conduction.hpp"
 #include "heat/convection.hpp"
+#include "heat/gas_conduction.hpp"
+#include "heat/radiation.hpp"
 #include "heat/shape.hpp"
 
 #include <algorithm>
@@ -87,6 +89,7 @@ struct ThermalSystem::ContactData {
     double conductance = 0;      // H (W/K)
     double wall_temperature = 0; // K, walls only
     bool wall = false;
+    bool radiative = false;     // conductance holds K (W/K^4): rate K (T_j^4 - T_i^4)
     std::vector<int> patches_a; // boundary patches of i under the contact (resolved)
     std::vector<int> patches_b; // of j
 };
@@ -176,6 +179,32 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
                 "is built into a template's matrix and a body turns; not yet (use "
                 "stagnation = false or the lumped model)",
                 mats[m].name, where));
+        }
+    }
+    // Gas-gap conduction is a sphere-pair model (Cheng et al. 1999): refuse heated bodies. The
+    // radiation view factor is a sphere estimate: refuse bodies of a material with an emissivity.
+    for (const auto& [material, shape, where] : kinds) {
+        const MaterialHeat& mh = spec_.materials[static_cast<std::size_t>(material)];
+        if (shape >= 0 && mh.enabled && mh.emissivity > 0.0) {
+            throw InputError(fmt::format(
+                "heat: material \"{}\" has an emissivity and non-spherical particles (shape "
+                "\"{}\", {}): radiation for non-spherical shapes: not yet (the view factor is a "
+                "sphere estimate; set emissivity = 0 or use spheres)",
+                mats[static_cast<std::size_t>(material)].name,
+                sys.spec().shapes[static_cast<std::size_t>(shape)].name, where));
+        }
+    }
+    if (spec_.gas.conductivity > 0.0) {
+        for (const auto& [material, shape, where] : kinds) {
+            if (shape >= 0 && spec_.materials[static_cast<std::size_t>(material)].enabled) {
+                throw InputError(fmt::format(
+                    "heat: gas_conductivity > 0 with heated non-spherical particles (material "
+                    "\"{}\", shape \"{}\", {}): gas-gap conduction for non-spherical shapes: "
+                    "not yet (the Cheng et al. lens model is for spheres; set gas_conductivity "
+                    "= 0 or use spheres)",
+                    mats[static_cast<std::size_t>(material)].name,
+                    sys.spec().shapes[static_cast<std::size_t>(shape)].name, where));
+            }
         }
     }
     sync(sys);
@@ -369,7 +398,7 @@ double ThermalSystem::contact_temperature(const Record& r, const ContactData& c,
     const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
     const std::span<const double> f = pool_.field(r.slot);
     const std::vector<int>& patches = side_b ? c.patches_b : c.patches_a;
-    if (t.spherical) {
+    if (t.spherical && !c.radiative) {
         // The seed's undisturbed temperature (Inv. V L1965) along the rows under the contact.
         return heat::undisturbed_temperature(*t.grid, t.res, f, patches);
     }
@@ -484,6 +513,8 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
         worst = std::max(worst, pair_rate);
         data_.push_back(std::move(d));
     }
+    add_gas_gaps(sys, g_sum, worst);
+    add_radiation(sys, g_sum, worst);
     for (std::size_t i = 0; i < p.size(); ++i) {
         if (g_sum[i] > 0.0) {
             const Record& r = by_id_[static_cast<std::size_t>(p.id[i])];
@@ -544,7 +575,8 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
         for (const ContactData& d : data_) {
             const double ta = contact_temperature(d.a, d, false);
             const double tb = d.wall ? d.wall_temperature : contact_temperature(d.b, d, true);
-            const double q = d.conductance * (tb - ta); // into i
+            const double q = d.radiative ? d.conductance * (tb * tb * tb * tb - ta * ta * ta * ta)
+                                         : d.conductance * (tb - ta); // into i
             add(d.a, d.patches_a, q);
             if (d.wall) {
                 external_heat_ += q * dt_sub;
@@ -625,6 +657,110 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
     counters_.substeps += substeps;
     counters_.max_substeps = std::max(counters_.max_substeps, substeps);
     counters_.contacts += static_cast<long>(data_.size());
+}
+
+void ThermalSystem::add_gas_gaps(const dynamics::System& sys, std::vector<double>& g_sum,
+                                 double& worst) {
+    if (!(spec_.gas.conductivity > 0.0)) {
+        return;
+    }
+    // Heated spheres only (radius 0 hides the others from the pair search). The search is a cell
+    // list of its own at each thermal step, so the cut-off does not depend on the neighbour list's
+    // skin (by default 0.2 R, well below the seed's gap cut-off of R).
+    const ParticleStore& p = sys.particles();
+    std::vector<double> r(p.size(), 0.0);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        if (p.shape[i] < 0 && by_id_[static_cast<std::size_t>(p.id[i])].slot >= 0) {
+            r[i] = p.radius[i];
+        }
+    }
+    long pairs = 0;
+    for (const heat::NearPair& np : heat::near_sphere_pairs(p.x, r, spec_.gas.cutoff)) {
+        ContactData d;
+        d.a = by_id_[static_cast<std::size_t>(p.id[np.i])];
+        d.b = by_id_[static_cast<std::size_t>(p.id[np.j])];
+        const Vec3 between = p.x[np.j] - p.x[np.i];
+        const double s = between.norm();
+        const double k_a = spec_.materials[static_cast<std::size_t>(d.a.material)].conductivity;
+        const double k_b = spec_.materials[static_cast<std::size_t>(d.b.material)].conductivity;
+        d.conductance = heat::gas_gap_conductance(r[np.i], r[np.j], s, k_a, k_b, spec_.gas);
+        if (!(d.conductance > 0.0)) {
+            continue;
+        }
+        // Resolved spheres take the heat on the patches under the lens r <= r_sf around the
+        // line of centres (world axes = body frame for spheres).
+        const Vec3 n = between / s;
+        const double lens = heat::gas_gap_radius(r[np.i], r[np.j], s, spec_.gas);
+        if (d.a.templ >= 0) {
+            d.patches_a = heat::contact_patches(
+                *templates_[static_cast<std::size_t>(d.a.templ)]->grid, r[np.i] * n, n, lens);
+        }
+        if (d.b.templ >= 0) {
+            d.patches_b = heat::contact_patches(
+                *templates_[static_cast<std::size_t>(d.b.templ)]->grid, -r[np.j] * n, -n, lens);
+        }
+        g_sum[np.i] += d.conductance;
+        g_sum[np.j] += d.conductance;
+        worst = std::max(worst, d.conductance / patch_capacity(d.a, d.patches_a) +
+                                    d.conductance / patch_capacity(d.b, d.patches_b));
+        data_.push_back(std::move(d));
+        ++pairs;
+    }
+    gas_pairs_ += pairs;
+}
+
+void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<double>& g_sum,
+                                  double& worst) {
+    const ParticleStore& p = sys.particles();
+    const auto emissivity = [&](const Record& rec) {
+        return spec_.materials[static_cast<std::size_t>(rec.material)].emissivity;
+    };
+    // Heated spheres with an emissivity (others radius 0: left out of the search).
+    std::vector<double> r(p.size(), 0.0);
+    bool any = false;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        const Record& rec = by_id_[static_cast<std::size_t>(p.id[i])];
+        if (p.shape[i] < 0 && rec.slot >= 0 && emissivity(rec) > 0.0) {
+            r[i] = p.radius[i];
+            any = true;
+        }
+    }
+    if (!any) {
+        return;
+    }
+    long pairs = 0;
+    for (const heat::NearPair& np : heat::near_sphere_pairs(p.x, r, spec_.radiation_cutoff)) {
+        ContactData d;
+        d.radiative = true;
+        d.a = by_id_[static_cast<std::size_t>(p.id[np.i])];
+        d.b = by_id_[static_cast<std::size_t>(p.id[np.j])];
+        const Vec3 between = p.x[np.j] - p.x[np.i];
+        const double s = between.norm();
+        // Overlapping (touching) spheres radiate as if just touching.
+        d.conductance = heat::radiative_coefficient(
+            r[np.i], r[np.j], std::max(s, r[np.i] + r[np.j]), emissivity(d.a), emissivity(d.b));
+        // Resolved spheres exchange over the hemisphere facing the partner (world axes = body
+        // frame for spheres): its area-weighted cell temperature, and the heat spread over it.
+        const Vec3 n = between / s;
+        if (d.a.templ >= 0) {
+            d.patches_a = heat::contact_patches(
+                *templates_[static_cast<std::size_t>(d.a.templ)]->grid, r[np.i] * n, n, r[np.i]);
+        }
+        if (d.b.templ >= 0) {
+            d.patches_b = heat::contact_patches(
+                *templates_[static_cast<std::size_t>(d.b.templ)]->grid, -r[np.j] * n, -n, r[np.j]);
+        }
+        // Lag limit with the linearised conductance at the hotter side's current temperature.
+        const double g = heat::radiative_conductance_bound(
+            d.conductance, contact_temperature(d.a, d, false), contact_temperature(d.b, d, true));
+        g_sum[np.i] += g;
+        g_sum[np.j] += g;
+        worst = std::max(worst, g / patch_capacity(d.a, d.patches_a) +
+                                    g / patch_capacity(d.b, d.patches_b));
+        data_.push_back(std::move(d));
+        ++pairs;
+    }
+    radiation_pairs_ += pairs;
 }
 
 void ThermalSystem::particle_temperatures(const dynamics::System& sys,
@@ -847,6 +983,8 @@ std::string ThermalSystem::summary_json() const {
     j += fmt::format("    \"max_iterations\": {},\n", k.max_iterations);
     j += fmt::format("    \"unconverged_solves\": {},\n", k.unconverged);
     j += fmt::format("    \"conducting_contacts\": {},\n", k.contacts);
+    j += fmt::format("    \"gas_gap_pairs\": {},\n", gas_pairs_);
+    j += fmt::format("    \"radiation_pairs\": {},\n", radiation_pairs_);
     j += fmt::format("    \"thermal_energy\": {},\n", num(thermal_energy()));
     j += fmt::format("    \"external_heat\": {}\n", num(external_heat_));
     j += "  }";

@@ -1,8 +1,10 @@
 #pragma once
 // Heat in the run loop: the temperatures of every particle of a dynamics::System, advanced every
 // `step_multiple` mechanical steps by the heat library (lumped or resolved per material), coupled
-// through lagged contact conduction (particle-particle and particle-wall), convection to a
-// prescribed ambient and a prescribed surface flux. Theory: docs/theory/heat.md, "Coupling".
+// through lagged contact conduction (particle-particle and particle-wall), gas-gap conduction and
+// radiation between neighbouring spheres (pairs from a cell search of their own at each thermal
+// step), convection to a prescribed ambient and a prescribed surface flux. Theory:
+// docs/theory/heat.md, "Coupling", "Gas-gap conduction", "Radiation".
 //
 // Shapes: heat templates are keyed by (material, sphere radius) for spheres and by (material, shape
 // template) for bodies (clumps, superquadrics). Lumped bodies take volume and surface area from
@@ -37,7 +39,7 @@ struct ThermalCounters {
     long iterations = 0;      ///< iterations of those solves (-)
     int max_iterations = 0;   ///< most iterations of one solve (-)
     long unconverged = 0;     ///< solves that hit the iteration cap (-)
-    long contacts = 0;        ///< conducting contacts summed over thermal steps (-)
+    long contacts = 0;        ///< exchanging pairs (contacts, gas, radiation), summed (-)
 };
 
 /// Model actually used per material, decided at start-up.
@@ -153,6 +155,14 @@ class ThermalSystem {
     [[nodiscard]] double patch_capacity(const Record& r, const std::vector<int>& patches) const;
     [[nodiscard]] double contact_temperature(const Record& r, const ContactData& c,
                                              bool side_j) const;
+    /// Appends the gas-gap (particle-fluid-particle) exchange of every heated sphere pair within
+    /// the cut-off to data_, adding its conductances to `g_sum` (W/K, by particle index) and its
+    /// pair rate to `worst` (1/s) for the lag limit. Nothing without gas.
+    void add_gas_gaps(const dynamics::System& sys, std::vector<double>& g_sum, double& worst);
+    /// Appends the radiative exchange of every pair of heated spheres with emissivities > 0 within
+    /// radiation_cutoff to data_ (coefficient K, W/K^4), with the linearised conductance
+    /// 4 K T^3 in `g_sum` and `worst` for the lag limit. Nothing without emissivities.
+    void add_radiation(const dynamics::System& sys, std::vector<double>& g_sum, double& worst);
 
     HeatSpec spec_;
     double dt_ = 0;
@@ -181,6 +191,9 @@ class ThermalSystem {
     double external_heat_ = 0;
     ThermalCounters counters_;
     std::vector<std::string> warnings_;
+    // Pairs summed over this process's thermal steps (summary.json; not checkpointed).
+    long gas_pairs_ = 0;       // gas-gap pairs
+    long radiation_pairs_ = 0; // radiating pairs
     bool warned_lag_ = false;
     bool warned_solver_ = false;
 };

@@ -147,6 +147,49 @@ TEST(CaseReaderHeat, RangesAndChoicesAreChecked) {
               std::string::npos);
 }
 
+TEST(CaseReaderHeat, GasGapKeysReadWithDefaultsAndRanges) {
+    // Defaults: no gas (k_f = 0), the seed's porosity 0.4 and cut-off H/R = 0.5.
+    const CaseSpec d = read_case_text(base, "case.toml");
+    EXPECT_DOUBLE_EQ(d.heat.gas.conductivity, 0.0);
+    EXPECT_DOUBLE_EQ(d.heat.gas.porosity, 0.4);
+    EXPECT_DOUBLE_EQ(d.heat.gas.cutoff, 0.5);
+    EXPECT_NE(d.resolved_toml.find("gas_porosity"), std::string::npos);
+    const CaseSpec c = read_case_text(
+        edit("step_multiple = 50",
+             "step_multiple = 50\ngas_conductivity = 0.02818\ngas_porosity = 0.42\ngas_cutoff = "
+             "0.3"),
+        "case.toml");
+    EXPECT_DOUBLE_EQ(c.heat.gas.conductivity, 0.02818);
+    EXPECT_DOUBLE_EQ(c.heat.gas.porosity, 0.42);
+    EXPECT_DOUBLE_EQ(c.heat.gas.cutoff, 0.3);
+    std::string e =
+        error_of(edit("step_multiple = 50", "step_multiple = 50\ngas_conductivity = -0.1"));
+    EXPECT_NE(e.find("case.toml:46: heat.gas_conductivity: -0.1 W/(m K) is out of range"),
+              std::string::npos)
+        << e;
+    e = error_of(edit("step_multiple = 50", "step_multiple = 50\ngas_porosity = 1"));
+    EXPECT_NE(e.find("heat.gas_porosity"), std::string::npos) << e;
+    EXPECT_NE(e.find("0 < value < 1"), std::string::npos) << e;
+    e = error_of(edit("step_multiple = 50", "step_multiple = 50\ngas_cutoff = 0"));
+    EXPECT_NE(e.find("heat.gas_cutoff"), std::string::npos) << e;
+}
+
+TEST(CaseReaderHeat, RadiationKeysReadWithDefaultsAndRanges) {
+    const CaseSpec d = read_case_text(base, "case.toml");
+    EXPECT_DOUBLE_EQ(d.heat.materials[0].emissivity, 0.0); // default: no radiation
+    EXPECT_DOUBLE_EQ(d.heat.radiation_cutoff, 0.5);        // seed: neighbours within R
+    const CaseSpec c = read_case_text(
+        edit("radial_cells = 6", "radial_cells = 6\nemissivity = 0.85"), "case.toml");
+    EXPECT_DOUBLE_EQ(c.heat.materials[0].emissivity, 0.85);
+    std::string e = error_of(edit("radial_cells = 6", "radial_cells = 6\nemissivity = 1.2"));
+    EXPECT_NE(e.find("material[0].heat.emissivity: 1.2 is out of range"), std::string::npos) << e;
+    e = error_of(edit("step_multiple = 50", "step_multiple = 50\nradiation_cutoff = -1"));
+    EXPECT_NE(e.find("heat.radiation_cutoff"), std::string::npos) << e;
+    const CaseSpec r = read_case_text(
+        edit("step_multiple = 50", "step_multiple = 50\nradiation_cutoff = 2"), "case.toml");
+    EXPECT_DOUBLE_EQ(r.heat.radiation_cutoff, 2.0);
+}
+
 TEST(CaseReaderHeat, HotWallNeedsAMaterialWithConductivity) {
     const std::string e = error_of(edit("material = \"glass\"\nmin", "material = \"steel\"\nmin"));
     EXPECT_NE(e.find("wall[0].temperature"), std::string::npos) << e;

@@ -2,6 +2,7 @@
 #include "dynamics/system.hpp"
 #include "geometry/clump.hpp"
 #include "geometry/shape_metrics.hpp"
+#include "heat/radiation.hpp"
 #include "thermal/thermal_system.hpp"
 
 #include <cmath>
@@ -573,6 +574,171 @@ TEST(ThermalSystem, AutoUsesVolumeOverAreaOfTheTemplate) {
     EXPECT_EQ(heat.choices()[0].used, heat::HeatModel::lumped);
     // Its bounding sphere (r = 2 mm) would give h r / (3 k) = 0.27 > 0.1: resolved.
     EXPECT_GT(400.0 * 2e-3 / 3.0, h.biot_threshold);
+}
+
+} // namespace
+} // namespace kiln::thermal
+
+namespace kiln::thermal {
+namespace {
+
+/// Two equal spheres at rest without gravity, `gap` (m) between their surfaces: only the gas
+/// connects them.
+dynamics::SceneSpec gap_pair(double gap) {
+    dynamics::SceneSpec s;
+    s.materials.push_back({"a", 1e7, 0.3, 2700, 0.2, 0.3, 0.0});
+    s.gravity = Vec3::Zero();
+    s.time_step = 1e-5;
+    const double x = radius + 0.5 * gap;
+    s.particles.push_back({0, radius, Vec3(-x, 0, 0), Vec3::Zero(), Vec3::Zero()});
+    s.particles.push_back({0, radius, Vec3(x, 0, 0), Vec3::Zero(), Vec3::Zero()});
+    return s;
+}
+
+TEST(ThermalSystem, GasGapPairFollowsTheDiscreteExchangeAndConservesHeat) {
+    const double gap = 0.1 * radius; // H_g / R = 0.05, inside the cut-off 0.5
+    const dynamics::SceneSpec s = gap_pair(gap);
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::lumped, 200.0);
+    h.gas.conductivity = 0.0263; // W/(m K), air
+    h.step_multiple = 10000;     // 0.1 s thermal steps; the spheres do not move
+    ThermalSystem heat(h, sys);
+    const double e0 = heat.thermal_energy();
+    const double c = 2700 * 900 * 4.0 / 3.0 * std::numbers::pi * std::pow(radius, 3);
+    const double g =
+        heat::gas_gap_conductance(radius, radius, 2.0 * radius + gap, 200.0, 200.0, h.gas);
+    const int steps = 1000;
+    for (int k = 0; k < steps; ++k) {
+        heat.thermal_step(sys);
+    }
+    ParticleTemperatures t;
+    heat.particle_temperatures(sys, t);
+    // Lagged exchange of lumped particles: the difference shrinks by 1 - dt H (2 / C) per step.
+    const double factor = 1.0 - heat.time_step() * g * 2.0 / c;
+    const double expected = 300.0 * std::pow(factor, steps);
+    constexpr double discrete_tolerance = 1e-9; // rounding over 1000 steps, relative to dT0
+    EXPECT_EQ(heat.counters().max_substeps, 1);
+    EXPECT_NEAR(t.mean[0] - t.mean[1], expected, discrete_tolerance * 300.0);
+    EXPECT_LT(expected, 0.95 * 300.0); // the gas moved a measurable amount of heat
+    // What leaves one sphere enters the other: rounding only.
+    EXPECT_NEAR(heat.thermal_energy(), e0, 1e-12 * e0);
+    EXPECT_EQ(heat.counters().contacts, steps); // one conducting (gas) pair per step
+    // Beyond the cut-off (H_g / R > 0.5) nothing flows.
+    const dynamics::SceneSpec far = gap_pair(1.01 * radius);
+    dynamics::System sys_far(far);
+    ThermalSystem heat_far(h, sys_far);
+    heat_far.thermal_step(sys_far);
+    heat_far.particle_temperatures(sys_far, t);
+    EXPECT_EQ(t.mean[0], 600.0);
+    EXPECT_EQ(heat_far.counters().contacts, 0);
+}
+
+TEST(ThermalSystem, GasGapResolvedPairConservesHeat) {
+    const dynamics::SceneSpec s = gap_pair(0.02 * radius);
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::resolved, 1.0);
+    h.gas.conductivity = 0.0263;
+    ThermalSystem heat(h, sys);
+    const double e0 = heat.thermal_energy();
+    for (int k = 0; k < 200; ++k) {
+        heat.thermal_step(sys);
+    }
+    ParticleTemperatures t;
+    heat.particle_temperatures(sys, t);
+    // The solves leave relative residuals below 1e-12 (heat_for): drift of that order per step.
+    EXPECT_NEAR(heat.thermal_energy(), e0, 1e-9 * e0);
+    EXPECT_LT(t.mean[0], 600.0 - 1e-3);
+    EXPECT_GT(t.mean[1], 300.0 + 1e-3);
+    // The heat enters on the facing side: the surface of the cold sphere warms before its core.
+    EXPECT_GT(t.surface[1], t.core[1]);
+}
+
+TEST(ThermalSystem, RadiatingPairFollowsTheLaggedExchangeAndConservesHeat) {
+    // Two lumped spheres at 1000 K and 600 K, 0.2 R apart, grey (0.9, 0.6), no gas: each thermal
+    // step moves K (T_j^4 - T_i^4) dt from the hotter to the colder (lagged), replayed here.
+    const double gap = 0.2 * radius;
+    const dynamics::SceneSpec s = gap_pair(gap);
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::lumped, 200.0);
+    h.materials[0].emissivity = 0.9;
+    h.particle_temperature = {1000.0, 600.0};
+    h.step_multiple = 10000; // 0.1 s
+    ThermalSystem heat(h, sys);
+    const double e0 = heat.thermal_energy();
+    const double c = 2700 * 900 * 4.0 / 3.0 * std::numbers::pi * std::pow(radius, 3);
+    const double k = heat::radiative_coefficient(radius, radius, 2.0 * radius + gap, 0.9, 0.9);
+    double t1 = 1000.0;
+    double t2 = 600.0;
+    for (int n = 0; n < 500; ++n) {
+        heat.thermal_step(sys);
+        const double q = k * (std::pow(t2, 4) - std::pow(t1, 4)) * heat.time_step(); // into 1
+        t1 += q / c;
+        t2 -= q / c;
+    }
+    ParticleTemperatures t;
+    heat.particle_temperatures(sys, t);
+    constexpr double replay_tolerance = 1e-9; // K: rounding of 500 explicit steps
+    EXPECT_EQ(heat.counters().max_substeps, 1);
+    EXPECT_NEAR(t.mean[0], t1, replay_tolerance);
+    EXPECT_NEAR(t.mean[1], t2, replay_tolerance);
+    EXPECT_LT(t1, 1000.0 - 1.0); // radiation moved a measurable amount
+    EXPECT_NEAR(heat.thermal_energy(), e0, 1e-12 * e0);
+    // Beyond the cut-off (gap > R): nothing.
+    const dynamics::SceneSpec far = gap_pair(1.01 * 2.0 * radius);
+    dynamics::System sys_far(far);
+    ThermalSystem heat_far(h, sys_far);
+    heat_far.thermal_step(sys_far);
+    heat_far.particle_temperatures(sys_far, t);
+    EXPECT_EQ(t.mean[0], 1000.0);
+}
+
+TEST(ThermalSystem, RadiatingResolvedPairConservesHeat) {
+    const dynamics::SceneSpec s = gap_pair(0.1 * radius);
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::resolved, 1.0);
+    h.materials[0].emissivity = 1.0;
+    h.particle_temperature = {1200.0, 300.0};
+    ThermalSystem heat(h, sys);
+    const double e0 = heat.thermal_energy();
+    for (int k = 0; k < 200; ++k) {
+        heat.thermal_step(sys);
+    }
+    ParticleTemperatures t;
+    heat.particle_temperatures(sys, t);
+    // Relative residual 1e-12 per solve (heat_for): drift of that order per step.
+    EXPECT_NEAR(heat.thermal_energy(), e0, 1e-9 * e0);
+    EXPECT_GT(t.surface[1], t.core[1]); // heated from the facing side
+    EXPECT_LT(t.mean[0], 1200.0);
+    const auto [lo, hi] = heat.temperature_range();
+    EXPECT_GE(lo, 300.0 - 1e-9); // no undershoot of the lagged exchange
+    EXPECT_LE(hi, 1200.0 + 1e-9);
+}
+
+TEST(ThermalSystem, GasGapRefusesHeatedNonSphericalParticles) {
+    const dynamics::SceneSpec s = squeezed_bodies(dumbbell(1.5e-3), 1.5e-3, Quat::Identity(), 2e-5);
+    dynamics::System sys(s);
+    HeatSpec h = heat_for(s, heat::HeatModel::lumped, 1.0);
+    h.gas.conductivity = 0.0263;
+    try {
+        ThermalSystem heat(h, sys);
+        FAIL() << "gas-gap conduction with bodies must be refused";
+    } catch (const InputError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("gas-gap conduction for non-spherical shapes: not yet"),
+                  std::string::npos)
+            << what;
+        EXPECT_NE(what.find("dumbbell"), std::string::npos) << what;
+    }
+    h.gas.conductivity = 0.0;
+    h.materials[0].emissivity = 0.8;
+    try {
+        ThermalSystem heat(h, sys);
+        FAIL() << "radiation with bodies must be refused";
+    } catch (const InputError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("radiation for non-spherical shapes: not yet"), std::string::npos)
+            << what;
+    }
 }
 
 } // namespace
