@@ -40,6 +40,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
         return p_.shape[i] >= 0 ? &spec_.shapes[static_cast<std::size_t>(p_.shape[i])] : nullptr;
     };
     const auto is_convex = [](const Element& e) { return e.kind != Element::Kind::sphere; };
+    const bool first_touch = spec_.body_radius == BodyRadius::first_touch;
     // Elements of every particle, posed once per step.
     elements_.clear();
     element_begin_.assign(p_.size() + 1, 0);
@@ -71,7 +72,12 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     v_rel -= p_.v[j] + p_.omega[j].cross(rb);
                     m_eff = p_.mass[a] * p_.mass[j] / (p_.mass[a] + p_.mass[j]);
                 }
-                contact::ContactInput in{ec.normal, ec.overlap, ec.r_eff,     m_eff,       0.0,
+                // R*: with first_touch, the value of the contact's first step (constant R* makes
+                // the Hertz force the gradient of a potential; docs/theory/contact.md). Contacts
+                // without a superquadric have a constant R* anyway.
+                const double r_eff =
+                    first_touch && old != nullptr && old->r_eff > 0.0 ? old->r_eff : ec.r_eff;
+                contact::ContactInput in{ec.normal, ec.overlap, r_eff,        m_eff,       0.0,
                                          0.0,       v_rel,      Vec3::Zero(), Vec3::Zero()};
                 Vec3 shear = old ? old->shear : Vec3::Zero();
                 const contact::ContactOutput out = contact::evaluate(
@@ -83,7 +89,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     p_.force[j] -= out.force;
                     p_.torque[j] -= rb.cross(out.force);
                 }
-                next[key] = {shear, ec.normal, ec.point, ec.overlap, ec.r_eff, out.force};
+                next[key] = {shear, ec.normal, ec.point, ec.overlap, r_eff, out.force};
                 t.energy += out.elastic_energy;
                 t.max_ratio = std::max(t.max_ratio, ratio);
                 ++t.contacts;
