@@ -77,17 +77,20 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 // without a superquadric have a constant R* anyway.
                 const double r_eff =
                     first_touch && old != nullptr && old->r_eff > 0.0 ? old->r_eff : ec.r_eff;
-                contact::ContactInput in{ec.normal, ec.overlap, r_eff,        m_eff,       0.0,
-                                         0.0,       v_rel,      Vec3::Zero(), Vec3::Zero()};
+                // Lever arms 0: v_rel is already the velocity of the contact point. The angular
+                // velocities only feed the rolling resistance (a couple, torque_i and torque_j).
+                const Vec3 wb = b >= 0 ? p_.omega[static_cast<std::uint32_t>(b)] : Vec3::Zero();
+                contact::ContactInput in{ec.normal, ec.overlap, r_eff,       m_eff, 0.0,
+                                         0.0,       v_rel,      p_.omega[a], wb};
                 Vec3 shear = old ? old->shear : Vec3::Zero();
                 const contact::ContactOutput out = contact::evaluate(
                     law, spec_.contact, pairs_.at(p_.material[a], material_b), in, shear, dt);
                 p_.force[a] += out.force;
-                p_.torque[a] += ra.cross(out.force);
+                p_.torque[a] += ra.cross(out.force) + out.torque_i;
                 if (b >= 0) {
                     const auto j = static_cast<std::uint32_t>(b);
                     p_.force[j] -= out.force;
-                    p_.torque[j] -= rb.cross(out.force);
+                    p_.torque[j] += out.torque_j - rb.cross(out.force);
                 }
                 next[key] = {shear, ec.normal, ec.point, ec.overlap, r_eff, out.force};
                 t.energy += out.elastic_energy;
