@@ -376,8 +376,9 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
         return;
     }
     if (const auto* c = std::get_if<geometry::Clump>(&t->shape)) {
+        const Mat3 rot = q.toRotationMatrix(); // one conversion for all members
         for (const geometry::ClumpSphere& s : c->spheres) {
-            out.push_back({Element::Kind::sphere, x + q * s.centre, s.radius, nullptr,
+            out.push_back({Element::Kind::sphere, x + rot * s.centre, s.radius, nullptr,
                            Quat::Identity(), s.radius});
         }
         return;
