@@ -520,7 +520,8 @@ ElementContact element_wall_contact(const Element& a, const WallShape& w) {
     }
     // Convex element: the deepest point is the support point against the wall normal (plane), or
     // along the outward radial direction of the centre (cylinder; exact in the limit of a wall
-    // radius much larger than the particle). The wall is flat for the effective radius.
+    // radius much larger than the particle). R*: a plane is flat; a cylinder is concave around
+    // its circumference (concave_wall_radius).
     const geometry::PosedSuperquadric p{a.sq, a.centre, a.q};
     const Vec3 deepest = wall_deepest([&](const Vec3& d) { return p.support(d); }, a, w, out);
     if (!(out.overlap > 0.0)) {
