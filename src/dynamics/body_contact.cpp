@@ -4,6 +4,7 @@
 #include "dynamics/body_contact.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -38,6 +39,64 @@ double effective_radius(double k1, double k2, const Element& a, const Element* b
     const double kmin = 1.0 / std::max(a.radius, b ? b->radius : a.radius);
     const double r = 1.0 / std::sqrt(std::max(k1, kmin) * std::max(k2, kmin));
     return std::isfinite(r) ? std::max(r, lo) : lo; // infinite curvature: a tip
+}
+
+/// Eigenvalues (smaller first) of the symmetric 2x2 matrix [[k11, k12], [k12, k22]].
+std::array<double, 2> eigen2(double k11, double k22, double k12) {
+    const double mean = 0.5 * (k11 + k22);
+    const double diff = std::sqrt(0.25 * (k11 - k22) * (k11 - k22) + k12 * k12);
+    return {mean - diff, mean + diff};
+}
+
+/// Effective radius of a superquadric element touching the inside of a cylinder wall of radius
+/// `wall_radius` and unit axis `axis` (world) at the body point p_body (body frame); n is the
+/// contact normal (world, from the wall into the body). The wall is concave, with curvature
+/// 1/R_wall around its circumference t = axis x n and none along its axis; a concave surface counts
+/// negative in the relative curvature (Johnson 1985, Sec. 4.1: the gap is 1/2 x^T (K_1 + K_2) x),
+/// so the relative tensor in the tangent plane is K_body - t t^T / R_wall and R* = 1/sqrt(k1 k2)
+/// of its eigenvalues. The body's principal curvatures are first raised to at least 1/L, as on a
+/// plane (effective_radius), so a flat face inside a cylinder gets k = 1/L along the axis and
+/// about 1/L - 1/R_wall around it; relative curvatures are kept at or above 1/(2L) (a wall
+/// narrower than the particle's diameter would otherwise give a conforming, infinite R*).
+double concave_wall_radius(const Element& a, const Vec3& p_body, const Vec3& n, const Vec3& axis,
+                           double wall_radius) {
+    const Mat3 r = a.q.toRotationMatrix();
+    const Mat3 k = r * a.sq->curvature_tensor(p_body) * r.transpose();
+    if (!k.allFinite()) { // a tip: R* at its floor, wall or not
+        const auto kp = a.sq->principal_curvatures(p_body);
+        return effective_radius(kp[0], kp[1], a, nullptr);
+    }
+    const Vec3 e1 = n.unitOrthogonal();
+    const Vec3 e2 = n.cross(e1);
+    const double k11 = e1.dot(k * e1);
+    const double k22 = e2.dot(k * e2);
+    const double k12 = 0.5 * (e1.dot(k * e2) + e2.dot(k * e1));
+    // Body tensor in the (e1, e2) basis with its eigenvalues floored at 1/L: rebuild from the
+    // eigen-decomposition (the eigenvector of the smaller eigenvalue is (k12, lo - k11)).
+    const double kmin = 1.0 / a.radius;
+    const auto ev = eigen2(k11, k22, k12);
+    Vec3 u(k12, ev[0] - k11, 0.0); // (e1, e2) coordinates; third component unused
+    if (u.head<2>().squaredNorm() < 1e-30 * (k11 * k11 + k22 * k22 + 1.0)) {
+        u = k11 <= k22 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+    }
+    u.normalize();
+    const double l0 = std::max(ev[0], kmin);
+    const double l1 = std::max(ev[1], kmin);
+    // K = l0 u u^T + l1 v v^T with v perpendicular to u in the plane.
+    const double b11 = l0 * u.x() * u.x() + l1 * u.y() * u.y();
+    const double b22 = l0 * u.y() * u.y() + l1 * u.x() * u.x();
+    const double b12 = (l0 - l1) * u.x() * u.y();
+    // Circumferential direction of the wall at the contact, in the same basis.
+    Vec3 t = axis.cross(n);
+    const double tn = t.norm();
+    t = tn > 0.0 ? Vec3(t / tn) : Vec3::Zero();
+    const double t1 = t.dot(e1);
+    const double t2 = t.dot(e2);
+    const auto rel = eigen2(b11 - t1 * t1 / wall_radius, b22 - t2 * t2 / wall_radius,
+                            b12 - t1 * t2 / wall_radius);
+    const double floor = 0.5 * kmin;
+    const double lo = kRadiusFloor * a.min_size;
+    return std::max(1.0 / std::sqrt(std::max(rel[0], floor) * std::max(rel[1], floor)), lo);
 }
 
 /// Exponent below which a superquadric counts as blocky for the separation gate (-).
@@ -209,6 +268,39 @@ ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase m
     return out;
 }
 
+/// Deepest point (m, world) of a convex element a against an analytic wall, from its support map
+/// `support` (world direction -> world point): the support point against a plane's normal, or
+/// along the outward radial direction of the centre inside a cylinder (exact when the wall radius
+/// is much larger than the particle). Sets out.overlap (negative when apart) and out.normal (unit,
+/// from the wall into the element). Shared by superquadrics and polyhedra.
+template <class Support>
+Vec3 wall_deepest(const Support& support, const Element& a, const WallShape& w,
+                  ElementContact& out) {
+    Vec3 deepest = a.centre;
+    std::visit(
+        [&](const auto& s) {
+            using S = std::decay_t<decltype(s)>;
+            if constexpr (std::is_same_v<S, PlaneWall>) {
+                deepest = support(Vec3(-s.normal));
+                out.overlap = -(deepest - s.point).dot(s.normal);
+                out.normal = s.normal;
+            } else {
+                Vec3 rho = a.centre - s.axis_point;
+                rho -= rho.dot(s.axis) * s.axis;
+                const Vec3 dir = rho.norm() > 1e-12 * a.radius ? Vec3(rho.normalized())
+                                                               : Vec3(s.axis.unitOrthogonal());
+                deepest = support(dir);
+                Vec3 rp = deepest - s.axis_point;
+                rp -= rp.dot(s.axis) * s.axis;
+                const double dist = rp.norm();
+                out.overlap = dist - s.radius;
+                out.normal = dist > 0.0 ? Vec3(-rp / dist) : Vec3(-dir);
+            }
+        },
+        w);
+    return deepest;
+}
+
 /// Depth band, as a fraction of the overlap, within which vertices share the contact point.
 constexpr double kTieBand = 0.02;
 
@@ -241,28 +333,7 @@ Vec3 wall_point(const geometry::PosedPolyhedron& p, double overlap, const Vec3& 
 ElementContact polyhedron_wall(const Element& a, const WallShape& w) {
     ElementContact out;
     const geometry::PosedPolyhedron p{a.poly, a.centre, a.q};
-    Vec3 deepest = a.centre;
-    std::visit(
-        [&](const auto& s) {
-            using S = std::decay_t<decltype(s)>;
-            if constexpr (std::is_same_v<S, PlaneWall>) {
-                deepest = p.support(-s.normal);
-                out.overlap = -(deepest - s.point).dot(s.normal);
-                out.normal = s.normal;
-            } else {
-                Vec3 rho = a.centre - s.axis_point;
-                rho -= rho.dot(s.axis) * s.axis;
-                const Vec3 dir = rho.norm() > 1e-12 * a.radius ? Vec3(rho.normalized())
-                                                               : Vec3(s.axis.unitOrthogonal());
-                deepest = p.support(dir);
-                Vec3 rp = deepest - s.axis_point;
-                rp -= rp.dot(s.axis) * s.axis;
-                const double dist = rp.norm();
-                out.overlap = dist - s.radius;
-                out.normal = dist > 0.0 ? Vec3(-rp / dist) : Vec3(-dir);
-            }
-        },
-        w);
+    wall_deepest([&](const Vec3& d) { return p.support(d); }, a, w, out);
     if (!(out.overlap > 0.0)) {
         out.overlap = 0.0;
         return out;
@@ -305,8 +376,9 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
         return;
     }
     if (const auto* c = std::get_if<geometry::Clump>(&t->shape)) {
+        const Mat3 rot = q.toRotationMatrix(); // one conversion for all members
         for (const geometry::ClumpSphere& s : c->spheres) {
-            out.push_back({Element::Kind::sphere, x + q * s.centre, s.radius, nullptr,
+            out.push_back({Element::Kind::sphere, x + rot * s.centre, s.radius, nullptr,
                            Quat::Identity(), s.radius});
         }
         return;
@@ -448,38 +520,23 @@ ElementContact element_wall_contact(const Element& a, const WallShape& w) {
     }
     // Convex element: the deepest point is the support point against the wall normal (plane), or
     // along the outward radial direction of the centre (cylinder; exact in the limit of a wall
-    // radius much larger than the particle). The wall is flat for the effective radius.
+    // radius much larger than the particle). R*: a plane is flat; a cylinder is concave around
+    // its circumference (concave_wall_radius).
     const geometry::PosedSuperquadric p{a.sq, a.centre, a.q};
-    Vec3 deepest;
-    std::visit(
-        [&](const auto& s) {
-            using S = std::decay_t<decltype(s)>;
-            if constexpr (std::is_same_v<S, PlaneWall>) {
-                deepest = p.support(-s.normal);
-                out.overlap = -(deepest - s.point).dot(s.normal);
-                out.normal = s.normal;
-            } else {
-                Vec3 rho = a.centre - s.axis_point;
-                rho -= rho.dot(s.axis) * s.axis;
-                const Vec3 dir = rho.norm() > 1e-12 * a.radius ? Vec3(rho.normalized())
-                                                               : Vec3(s.axis.unitOrthogonal());
-                deepest = p.support(dir);
-                Vec3 rp = deepest - s.axis_point;
-                rp -= rp.dot(s.axis) * s.axis;
-                const double dist = rp.norm();
-                out.overlap = dist - s.radius;
-                out.normal = dist > 0.0 ? Vec3(-rp / dist) : Vec3(-dir);
-            }
-        },
-        w);
+    const Vec3 deepest = wall_deepest([&](const Vec3& d) { return p.support(d); }, a, w, out);
     if (!(out.overlap > 0.0)) {
         out.overlap = 0.0;
         return out;
     }
     out.touching = true;
     out.point = deepest + 0.5 * out.overlap * out.normal;
-    const auto k = a.sq->principal_curvatures(a.q.conjugate() * (deepest - a.centre));
-    out.r_eff = effective_radius(k[0], k[1], a, nullptr);
+    const Vec3 p_body = a.q.conjugate() * (deepest - a.centre);
+    if (const auto* cyl = std::get_if<CylinderWall>(&w)) {
+        out.r_eff = concave_wall_radius(a, p_body, out.normal, cyl->axis, cyl->radius);
+    } else {
+        const auto k = a.sq->principal_curvatures(p_body);
+        out.r_eff = effective_radius(k[0], k[1], a, nullptr);
+    }
     return out;
 }
 

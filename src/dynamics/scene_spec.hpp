@@ -38,6 +38,14 @@ struct OrientationSpec {
     Quat fixed = Quat::Identity(); ///< used when not random: body -> world
 };
 
+/// Effective radius R* of a contact with a superquadric (docs/theory/contact.md, "Effective
+/// radius"). Other contacts (sphere elements, polyhedra) have a constant R* either way.
+enum class BodyRadius {
+    first_touch, ///< local curvature at the first step of the contact, kept while it lasts
+                 ///< (default)
+    per_step     ///< local curvature at the current contact point, re-evaluated every step
+};
+
 /// Narrow-phase method for pairs involving a superquadric (geometry/convex_contact.hpp) or two
 /// polyhedra (geometry/polyhedron_contact.hpp).
 enum class NarrowPhase {
@@ -97,8 +105,9 @@ struct SceneSpec {
         0.1; ///< warn when dt > this fraction of min(Rayleigh, contact time)
     bool allow_unsafe_time_step = false; ///< turn the "dt above critical" error into a warning
     double expected_speed = 0; ///< largest impact speed for the Hertz estimate (m/s), 0 = estimate
-    std::vector<geometry::ShapeTemplate> shapes;    ///< templates of the non-spherical particles
-    NarrowPhase narrow_phase = NarrowPhase::newton; ///< method for superquadric pairs
+    std::vector<geometry::ShapeTemplate> shapes;      ///< templates of the non-spherical particles
+    NarrowPhase narrow_phase = NarrowPhase::newton;   ///< method for superquadric pairs
+    BodyRadius body_radius = BodyRadius::first_touch; ///< R* of superquadric contacts
 };
 
 } // namespace kiln::dynamics

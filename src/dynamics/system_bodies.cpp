@@ -7,7 +7,9 @@
 #include "geometry/rotation.hpp"
 
 #include <algorithm>
+#include <map>
 #include <utility>
+#include <vector>
 
 namespace kiln::dynamics {
 
@@ -40,6 +42,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
         return p_.shape[i] >= 0 ? &spec_.shapes[static_cast<std::size_t>(p_.shape[i])] : nullptr;
     };
     const auto is_convex = [](const Element& e) { return e.kind != Element::Kind::sphere; };
+    const bool first_touch = spec_.body_radius == BodyRadius::first_touch;
     // Elements of every particle, posed once per step.
     elements_.clear();
     element_begin_.assign(p_.size() + 1, 0);
@@ -58,9 +61,13 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
         [&](const auto& law) {
             // One element contact: the law at the contact point with the velocity of that point;
             // force on a, reaction on b (b < 0: a wall, at rest with infinite mass).
+            // `it`: the contact's entry of the last step, or body_contacts_.end() (a new one).
+            // A kept contact moves its map node into `next` (no allocation per contact-step).
+            using Iter = std::map<BodyContactKey, BodyContact>::iterator;
             const auto apply = [&](std::uint32_t a, long b, const BodyContactKey& key,
-                                   const ElementContact& ec, const BodyContact* old, int material_b,
-                                   double ratio, ChunkTotals& t) {
+                                   const ElementContact& ec, Iter it, int material_b, double ratio,
+                                   ChunkTotals& t) {
+                const BodyContact* old = it == body_contacts_.end() ? nullptr : &it->second;
                 const Vec3 ra = ec.point - p_.x[a];
                 Vec3 v_rel = p_.v[a] + p_.omega[a].cross(ra);
                 double m_eff = p_.mass[a];
@@ -71,19 +78,34 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     v_rel -= p_.v[j] + p_.omega[j].cross(rb);
                     m_eff = p_.mass[a] * p_.mass[j] / (p_.mass[a] + p_.mass[j]);
                 }
-                contact::ContactInput in{ec.normal, ec.overlap, ec.r_eff,     m_eff,       0.0,
-                                         0.0,       v_rel,      Vec3::Zero(), Vec3::Zero()};
+                // R*: with first_touch, the value of the contact's first step (constant R* makes
+                // the Hertz force the gradient of a potential; docs/theory/contact.md). Contacts
+                // without a superquadric have a constant R* anyway.
+                const double r_eff =
+                    first_touch && old != nullptr && old->r_eff > 0.0 ? old->r_eff : ec.r_eff;
+                // Lever arms 0: v_rel is already the velocity of the contact point. The angular
+                // velocities only feed the rolling resistance (a couple, torque_i and torque_j).
+                const Vec3 wb = b >= 0 ? p_.omega[static_cast<std::uint32_t>(b)] : Vec3::Zero();
+                contact::ContactInput in{ec.normal, ec.overlap, r_eff,       m_eff, 0.0,
+                                         0.0,       v_rel,      p_.omega[a], wb};
                 Vec3 shear = old ? old->shear : Vec3::Zero();
                 const contact::ContactOutput out = contact::evaluate(
                     law, spec_.contact, pairs_.at(p_.material[a], material_b), in, shear, dt);
                 p_.force[a] += out.force;
-                p_.torque[a] += ra.cross(out.force);
+                p_.torque[a] += ra.cross(out.force) + out.torque_i;
                 if (b >= 0) {
                     const auto j = static_cast<std::uint32_t>(b);
                     p_.force[j] -= out.force;
-                    p_.torque[j] -= rb.cross(out.force);
+                    p_.torque[j] += out.torque_j - rb.cross(out.force);
                 }
-                next[key] = {shear, ec.normal, ec.point, ec.overlap, ec.r_eff, out.force};
+                const BodyContact now{shear, ec.normal, ec.point, ec.overlap, r_eff, out.force};
+                if (old != nullptr) {
+                    auto node = body_contacts_.extract(it);
+                    node.mapped() = now;
+                    next.insert(next.end(), std::move(node));
+                } else {
+                    next.emplace_hint(next.end(), key, now);
+                }
                 t.energy += out.elastic_energy;
                 t.max_ratio = std::max(t.max_ratio, ratio);
                 ++t.contacts;
@@ -92,6 +114,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // Pairs: the particle with the smaller id is a, so keys and histories do not depend
             // on the list's owner/partner order.
             const auto& nb = nl_.partners();
+            std::vector<std::uint32_t> near_b;
             const auto& owner = nl_.owners();
             for (const std::uint32_t k : body_entries_) {
                 std::uint32_t a = owner[k];
@@ -105,13 +128,25 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 }
                 const std::uint32_t a0 = element_begin_[a];
                 const std::uint32_t b0 = element_begin_[b];
+                // Elements of b that reach into a's bounding sphere (a clump pair touches with a
+                // few of its members: 12 x 12 candidate pairs become about 2 x 2).
+                near_b.clear();
+                for (std::uint32_t eb = b0; eb < element_begin_[b + 1]; ++eb) {
+                    const double rb = elements_[eb].radius + p_.radius[a];
+                    if ((elements_[eb].centre - p_.x[a]).squaredNorm() < rb * rb) {
+                        near_b.push_back(eb);
+                    }
+                }
+                if (near_b.empty()) {
+                    continue;
+                }
                 for (std::uint32_t ea = a0; ea < element_begin_[a + 1]; ++ea) {
                     const Element& A = elements_[ea];
                     const double rab = A.radius + p_.radius[b];
                     if ((A.centre - p_.x[b]).squaredNorm() >= rab * rab) {
                         continue;
                     }
-                    for (std::uint32_t eb = b0; eb < element_begin_[b + 1]; ++eb) {
+                    for (const std::uint32_t eb : near_b) {
                         const Element& B = elements_[eb];
                         const double re = A.radius + B.radius;
                         if ((A.centre - B.centre).squaredNorm() >= re * re) {
@@ -121,20 +156,24 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                                                  static_cast<std::int32_t>(ea - a0),
                                                  static_cast<std::int32_t>(eb - b0)};
                         const auto it = body_contacts_.find(key);
-                        const BodyContact* old = it == body_contacts_.end() ? nullptr : &it->second;
-                        // Warm start: the last normal, else the line of centres (a new contact).
-                        const Vec3 guess = old ? old->normal : Vec3(A.centre - B.centre);
-                        const bool usable = guess.squaredNorm() > 0.0;
-                        const Vec3 warm = usable ? Vec3(guess.normalized()) : Vec3::UnitZ();
+                        const bool convex = is_convex(A) || is_convex(B);
+                        // Warm start (convex pairs): the last normal, else the line of centres.
+                        Vec3 warm = Vec3::UnitZ();
+                        if (convex) {
+                            const Vec3 guess = it != body_contacts_.end()
+                                                   ? it->second.normal
+                                                   : Vec3(A.centre - B.centre);
+                            warm = guess.squaredNorm() > 0.0 ? Vec3(guess.normalized()) : warm;
+                        }
                         const ElementContact ec = element_contact(A, B, spec_.narrow_phase, &warm);
-                        if (is_convex(A) || is_convex(B)) {
+                        if (convex) {
                             ++np_.calls;
                             np_.fallbacks += ec.fell_back ? 1 : 0;
                             np_.failures += ec.converged ? 0 : 1;
                         }
                         if (ec.touching) {
-                            apply(a, b, key, ec, old, p_.material[b],
-                                  ec.overlap / ratio_size(A, &B), pair_totals);
+                            apply(a, b, key, ec, it, p_.material[b], ec.overlap / ratio_size(A, &B),
+                                  pair_totals);
                         }
                     }
                 }
@@ -158,8 +197,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         const BodyContactKey key{p_.id[a], -1 - static_cast<std::int64_t>(w),
                                                  static_cast<std::int32_t>(ea - a0), 0};
                         const auto it = body_contacts_.find(key);
-                        apply(a, -1, key, ec, it == body_contacts_.end() ? nullptr : &it->second,
-                              spec_.walls[w].material,
+                        apply(a, -1, key, ec, it, spec_.walls[w].material,
                               ec.overlap / ratio_size(elements_[ea], nullptr), wall_totals);
                     }
                 }
@@ -194,8 +232,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                                 static_cast<std::int32_t>(ea - a0),
                                 (static_cast<std::int32_t>(mc.feature) << 28) | mc.id};
                             const auto it = body_contacts_.find(key);
-                            apply(a, -1, key, ec,
-                                  it == body_contacts_.end() ? nullptr : &it->second, mw.material,
+                            apply(a, -1, key, ec, it, mw.material,
                                   ec.overlap / ratio_size(A, nullptr), wall_totals);
                         }
                     }

@@ -935,6 +935,10 @@ CaseSpec read_case_text(const std::string& text, const std::string& name) {
         c.scene.narrow_phase = s.text("narrow_phase", "newton", {"newton", "gjk_epa"}) == "newton"
                                    ? dynamics::NarrowPhase::newton
                                    : dynamics::NarrowPhase::gjk_epa;
+        c.scene.body_radius =
+            s.text("body_radius", "first_touch", {"first_touch", "per_step"}) == "first_touch"
+                ? dynamics::BodyRadius::first_touch
+                : dynamics::BodyRadius::per_step;
         s.finish({"stiffness", "tangential_stiffness_ratio"});
         resolved.insert_or_assign("contact", std::move(out_t));
     }

@@ -1,6 +1,7 @@
 // Non-spherical particles in the step loop: clumps and superquadrics, their contacts with spheres,
 // each other and walls, and the invariants the loop must keep.
 
+#include "body_scene.hpp"
 #include "core/error.hpp"
 #include "dynamics/system.hpp"
 #include "geometry/clump.hpp"
@@ -14,54 +15,12 @@
 namespace kiln::dynamics {
 namespace {
 
-geometry::ShapeTemplate shape(const std::string& name) {
-    return io::read_shape_file(io::find_shape_file(name, io::default_shape_dirs()));
-}
-
-geometry::ShapeTemplate superquadric(const Vec3& half_axes, double e1, double e2) {
-    geometry::Superquadric q;
-    q.half_axes = half_axes;
-    q.e1 = e1;
-    q.e2 = e2;
-    return geometry::make_template("sq", q);
-}
-
-SceneSpec base_scene() {
-    SceneSpec s;
-    s.materials.push_back({"m", 1e7, 0.3, 2500, 0.5, 0.3, 0.0});
-    s.time_step = 2e-6;
-    return s;
-}
-
-ParticleSpec body(int shape_index, const Vec3& x, const Vec3& v = Vec3::Zero(),
-                  const Vec3& omega = Vec3::Zero(), const Quat& q = Quat::Identity()) {
-    ParticleSpec p;
-    p.shape = shape_index;
-    p.x = x;
-    p.v = v;
-    p.omega = omega;
-    p.orientation.fixed = q;
-    return p;
-}
-
-Vec3 momentum(const System& sys) {
-    Vec3 m = Vec3::Zero();
-    for (std::size_t i = 0; i < sys.particles().size(); ++i) {
-        m += sys.particles().mass[i] * sys.particles().v[i];
-    }
-    return m;
-}
-
-/// Angular momentum about the origin (kg m^2/s, world): orbital plus spin.
-Vec3 angular_momentum(const System& sys) {
-    const ParticleStore& p = sys.particles();
-    Vec3 l = Vec3::Zero();
-    for (std::size_t i = 0; i < p.size(); ++i) {
-        l += p.mass[i] * p.x[i].cross(p.v[i]);
-        l += p.shape[i] >= 0 ? p.ang_mom[i] : Vec3(p.omega[i] / p.inv_inertia[i]);
-    }
-    return l;
-}
+using test::angular_momentum;
+using test::base_scene;
+using test::body;
+using test::momentum;
+using test::shape;
+using test::superquadric;
 
 TEST(Bodies, FreeAsymmetricBodyKeepsAngularMomentumAndEnergy) {
     SceneSpec s = base_scene();

@@ -2,6 +2,7 @@
 // both narrow phases agree, walls hold a body at rest, mesh walls act like analytic ones, refusals
 // and the saved state.
 
+#include "body_scene.hpp"
 #include "core/error.hpp"
 #include "dynamics/system.hpp"
 #include "io/mesh_reader.hpp"
@@ -15,45 +16,16 @@
 namespace kiln::dynamics {
 namespace {
 
-geometry::ShapeTemplate shape(const std::string& name) {
-    return io::read_shape_file(io::find_shape_file(name, io::default_shape_dirs()));
-}
+using test::angular_momentum;
+using test::body;
+using test::momentum;
+using test::shape;
 
+/// The shared scene without gravity.
 SceneSpec base_scene() {
-    SceneSpec s;
-    s.materials.push_back({"m", 1e7, 0.3, 2500, 0.5, 0.3, 0.0});
-    s.time_step = 2e-6;
+    SceneSpec s = test::base_scene();
     s.gravity.setZero();
     return s;
-}
-
-ParticleSpec body(int shape_index, const Vec3& x, const Vec3& v = Vec3::Zero(),
-                  const Vec3& omega = Vec3::Zero(), const Quat& q = Quat::Identity()) {
-    ParticleSpec p;
-    p.shape = shape_index;
-    p.x = x;
-    p.v = v;
-    p.omega = omega;
-    p.orientation.fixed = q;
-    return p;
-}
-
-Vec3 momentum(const System& sys) {
-    Vec3 m = Vec3::Zero();
-    for (std::size_t i = 0; i < sys.particles().size(); ++i) {
-        m += sys.particles().mass[i] * sys.particles().v[i];
-    }
-    return m;
-}
-
-Vec3 angular_momentum(const System& sys) {
-    const ParticleStore& p = sys.particles();
-    Vec3 l = Vec3::Zero();
-    for (std::size_t i = 0; i < p.size(); ++i) {
-        l += p.mass[i] * p.x[i].cross(p.v[i]);
-        l += p.shape[i] >= 0 ? p.ang_mom[i] : Vec3(p.omega[i] / p.inv_inertia[i]);
-    }
-    return l;
 }
 
 /// Oblique, off-centre collision of a polyhedron (template `name`) with a second particle (the

@@ -258,6 +258,19 @@ TEST(CaseReader, NarrowPhaseDefaultsToNewton) {
               std::string::npos);
 }
 
+TEST(CaseReader, BodyRadiusDefaultsToFirstTouchAndIsChecked) {
+    EXPECT_EQ(read_case_text(good, "case.toml").scene.body_radius,
+              dynamics::BodyRadius::first_touch);
+    const CaseSpec c = read_case_text(
+        edit("[[insert]]", "[contact]\nbody_radius = \"per_step\"\n\n[[insert]]"), "case.toml");
+    EXPECT_EQ(c.scene.body_radius, dynamics::BodyRadius::per_step);
+    EXPECT_NE(c.resolved_toml.find("body_radius = 'per_step'"), std::string::npos);
+    const std::string e =
+        error_of(edit("[[insert]]", "[contact]\nbody_radius = \"equivalent\"\n\n[[insert]]"));
+    EXPECT_NE(e.find("contact.body_radius"), std::string::npos) << e;
+    EXPECT_NE(e.find("first_touch"), std::string::npos) << e; // names what is allowed
+}
+
 TEST(CaseReader, ShapeErrorsAreLocated) {
     const auto body = [](const std::string& extra) {
         return shapes_test::with_bodies("[[particle]]\nmaterial = \"glass\"\n"

@@ -20,6 +20,12 @@ namespace {
 /// Least observed order (fit over dt..dt/4): second-order scheme; four chaotic realisations per
 /// step size scatter the fitted slope by about 0.2 (validation 04 measured 0.06 with twelve).
 constexpr double min_order = 1.7;
+/// Least observed order of superquadrics with Hertz and R* frozen at first touch. The force is
+/// conservative, but the narrow phase's stalled Newton searches (a few per thousand queries, more
+/// at smaller dt) fall back to an upper bound of the MTD, a residual that does not shrink at second
+/// order: the linear law on the same case measures 1.73 over dt..dt/4 and 1.64 with dt/8 added,
+/// first_touch 1.62 and 1.56 (README).
+constexpr double min_order_first_touch = 1.5;
 /// Largest relative energy error of a conservative run at dt/4: contact-onset residues and spring
 /// excursions of 16-24 bodies (validation 04 allows 1e-4 for 300 spheres at dt/8).
 constexpr double finest_bound = 1e-3;
@@ -77,8 +83,10 @@ BoxRun box_run(io::CaseSpec spec, double dt, int r) {
     return out;
 }
 
-/// Runs the step-size study; returns the observed order. `strict`: assert order and bound.
-double check_box(const io::CaseSpec& spec, const std::string& label, bool strict) {
+/// Runs the step-size study; returns the observed order. `strict`: assert `least_order` and the
+/// bound at dt/4.
+double check_box(const io::CaseSpec& spec, const std::string& label, bool strict,
+                 double least_order = min_order) {
     std::vector<double> dts;
     std::vector<double> mean_error;
     double finest_worst = 0.0;
@@ -102,10 +110,10 @@ double check_box(const io::CaseSpec& spec, const std::string& label, bool strict
                0.0, strict && f == step_factors.back() ? finest_bound : 0.0, "-");
     }
     const double order = log_slope(dts, mean_error);
-    record(label + " observed order (fit over dt..dt/4)", order, 2.0, strict ? 2.0 - min_order : 0,
-           "-");
+    record(label + " observed order (fit over dt..dt/4)", order, 2.0,
+           strict ? 2.0 - least_order : 0, "-");
     if (strict) {
-        EXPECT_GE(order, min_order) << label;
+        EXPECT_GE(order, least_order) << label;
         EXPECT_LT(finest_worst, finest_bound) << label;
     }
     return order;
@@ -131,10 +139,25 @@ TEST(BodyEnergy, SuperquadricsConserveEnergyAtSecondOrderWithTheLinearLaw) {
     check_box(with_law(load_case("case_superquadrics.toml"), false), "superquadrics linear", true);
 }
 
-TEST(BodyEnergy, SuperquadricsWithHertzAreRecorded) {
+io::CaseSpec with_radius(io::CaseSpec spec, dynamics::BodyRadius r) {
+    spec.scene.body_radius = r;
+    return spec;
+}
+
+TEST(BodyEnergy, SuperquadricsWithHertzFirstTouchConserveEnergyAtSecondOrder) {
+    // R* frozen at the first step of each contact (the default): the Hertz force of a contact is
+    // the gradient of 8/15 E* sqrt(R*) delta^(5/2), so the error is the integrator's (README).
+    check_box(with_radius(with_law(load_case("case_superquadrics.toml"), true),
+                          dynamics::BodyRadius::first_touch),
+              "superquadrics hertz first_touch", true, min_order_first_touch);
+}
+
+TEST(BodyEnergy, SuperquadricsWithHertzPerStepAreRecorded) {
     // R* follows the local curvature, which changes along a contact: the Hertz force is then not
     // the gradient of a potential and energy is conserved only up to that model error (README).
-    check_box(with_law(load_case("case_superquadrics.toml"), true), "superquadrics hertz", false);
+    check_box(with_radius(with_law(load_case("case_superquadrics.toml"), true),
+                          dynamics::BodyRadius::per_step),
+              "superquadrics hertz per_step", false);
 }
 
 } // namespace

@@ -1,0 +1,70 @@
+#pragma once
+// Helpers shared by the tests of bodies in the step loop (test_bodies, test_polyhedra,
+// test_body_rolling): templates by name, a one-material scene, placed bodies, and the momenta
+// the invariants are checked on. World frame throughout.
+
+#include "dynamics/system.hpp"
+#include "geometry/shape.hpp"
+#include "io/shape_reader.hpp"
+
+#include <string>
+
+namespace kiln::dynamics::test {
+
+/// Template `name` from the shipped shapes/ folder.
+inline geometry::ShapeTemplate shape(const std::string& name) {
+    return io::read_shape_file(io::find_shape_file(name, io::default_shape_dirs()));
+}
+
+/// Superquadric template with half-axes (m, body frame) and exponents e1, e2.
+inline geometry::ShapeTemplate superquadric(const Vec3& half_axes, double e1, double e2) {
+    geometry::Superquadric q;
+    q.half_axes = half_axes;
+    q.e1 = e1;
+    q.e2 = e2;
+    return geometry::make_template("sq", q);
+}
+
+/// One material "m" (E = 1e7 Pa, nu = 0.3, 2500 kg/m^3, e = 0.5, mu = 0.3), dt = 2e-6 s, default
+/// gravity (-9.81 m/s^2 along z).
+inline SceneSpec base_scene() {
+    SceneSpec s;
+    s.materials.push_back({"m", 1e7, 0.3, 2500, 0.5, 0.3, 0.0});
+    s.time_step = 2e-6;
+    return s;
+}
+
+/// A particle of template `shape_index` at x (m) with velocity v (m/s), angular velocity omega
+/// (rad/s) and orientation q (body -> world).
+inline ParticleSpec body(int shape_index, const Vec3& x, const Vec3& v = Vec3::Zero(),
+                         const Vec3& omega = Vec3::Zero(), const Quat& q = Quat::Identity()) {
+    ParticleSpec p;
+    p.shape = shape_index;
+    p.x = x;
+    p.v = v;
+    p.omega = omega;
+    p.orientation.fixed = q;
+    return p;
+}
+
+/// Total linear momentum (kg m/s).
+inline Vec3 momentum(const System& sys) {
+    Vec3 m = Vec3::Zero();
+    for (std::size_t i = 0; i < sys.particles().size(); ++i) {
+        m += sys.particles().mass[i] * sys.particles().v[i];
+    }
+    return m;
+}
+
+/// Angular momentum about the origin (kg m^2/s): orbital plus spin.
+inline Vec3 angular_momentum(const System& sys) {
+    const ParticleStore& p = sys.particles();
+    Vec3 l = Vec3::Zero();
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        l += p.mass[i] * p.x[i].cross(p.v[i]);
+        l += p.shape[i] >= 0 ? p.ang_mom[i] : Vec3(p.omega[i] / p.inv_inertia[i]);
+    }
+    return l;
+}
+
+} // namespace kiln::dynamics::test
