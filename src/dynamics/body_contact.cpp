@@ -209,6 +209,44 @@ ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase m
     return out;
 }
 
+/// Polyhedron element p against superquadric element s (normal from s to p): libccd GJK/EPA on
+/// the two support maps. The overlap is then re-evaluated exactly along EPA's normal from the
+/// analytic supports (an upper bound of the MTD, as the superquadric fallback does), so it does not
+/// carry EPA's tolerance. The polyhedron counts as flat at the contact (as for a sphere), so R* is
+/// the superquadric's, from its principal curvatures at its deepest point. A sphere element (a
+/// clump member) against a polyhedron never comes here (sphere_polyhedron is exact).
+ElementContact polyhedron_superquadric(const Element& p, const Element& s, const Vec3* warm) {
+    ElementContact out;
+    const geometry::PosedPolyhedron pp{p.poly, p.centre, p.q};
+    const geometry::PosedSuperquadric ps{s.sq, s.centre, s.q};
+    const auto along = [&](const Vec3& n) { return n.dot(ps.support(n)) - n.dot(pp.support(-n)); };
+    // Separating-axis shortcuts: the line of centres and the last normal.
+    const Vec3 line = p.centre - s.centre;
+    if (line.squaredNorm() > 0.0 && along(line.normalized()) < 0.0) {
+        return out;
+    }
+    if (warm != nullptr && along(*warm) < 0.0) {
+        return out;
+    }
+    const geometry::ConvexContact cc = geometry::ccd_contact(pp, ps, false);
+    out.converged = cc.converged;
+    if (!cc.converged || !cc.touching) {
+        return out;
+    }
+    const double depth = along(cc.normal);
+    if (!(depth > 0.0)) {
+        return out;
+    }
+    out.touching = true;
+    out.overlap = depth;
+    out.normal = cc.normal;
+    const Vec3 deepest_s = ps.support(cc.normal);
+    out.point = 0.5 * (pp.support(-cc.normal) + deepest_s);
+    const auto k = s.sq->principal_curvatures(s.q.conjugate() * (deepest_s - s.centre));
+    out.r_eff = effective_radius(k[0], k[1], s, &p);
+    return out;
+}
+
 /// Depth band, as a fraction of the overlap, within which vertices share the contact point.
 constexpr double kTieBand = 0.02;
 
@@ -357,10 +395,13 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
         c.normal = -c.normal;
         return c;
     }
-    if (poly_a || poly_b) {
-        // Polyhedron-superquadric: refused when the scene is built (System::add_body).
-        ElementContact c;
-        c.converged = false;
+    if (poly_a) {
+        return polyhedron_superquadric(a, b, warm);
+    }
+    if (poly_b) {
+        const Vec3 back = warm != nullptr ? Vec3(-*warm) : Vec3::Zero();
+        ElementContact c = polyhedron_superquadric(b, a, warm != nullptr ? &back : nullptr);
+        c.normal = -c.normal;
         return c;
     }
     const SphereAsSuperquadric sa(a.radius);
@@ -427,6 +468,18 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
     const geometry::ContactCurvature k = geometry::contact_curvature(pa, pb, cc);
     out.r_eff = effective_radius(k.k_min, k.k_max, a, &b);
     return out;
+}
+
+double flat_wall_radius(const Element& a, const Vec3& n) {
+    if (a.kind == Element::Kind::polyhedron) {
+        return a.r_equiv;
+    }
+    if (a.kind == Element::Kind::sphere) {
+        return a.radius;
+    }
+    const geometry::PosedSuperquadric p{a.sq, a.centre, a.q};
+    const auto k = a.sq->principal_curvatures(a.q.conjugate() * (p.support(-n) - a.centre));
+    return effective_radius(k[0], k[1], a, nullptr);
 }
 
 ElementContact element_wall_contact(const Element& a, const WallShape& w) {
