@@ -143,7 +143,7 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
             fields->write(*sys, *heat, spec.heat.field_particles);
         }
     };
-    if (!spec.scene.walls.empty()) {
+    if (!spec.scene.walls.empty() || !spec.scene.mesh_walls.empty()) {
         vtk.write_walls(spec.scene, opt.out_dir / "walls.vtp");
     }
     io::MonitorWriter monitors =

@@ -10,6 +10,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <type_traits>
+#include <utility>
 
 namespace kiln::dynamics {
 
@@ -223,13 +224,94 @@ ElementContact sphere_polyhedron(const Element& s, const Element& p) {
     return out;
 }
 
+/// Depth band, as a fraction of the overlap, within which vertices share the contact point.
+constexpr double kTieBand = 0.02;
+
+/// Vertices of p (world) within kTieBand * overlap of its support along d, with the weights
+/// w = 1 - (h_max - h_v) / band (> 0 only), appended to `out` (cleared first).
+void near_support(const geometry::PosedPolyhedron& p, const Vec3& d, double overlap,
+                  std::vector<std::pair<Vec3, double>>& out) {
+    out.clear();
+    const double top = d.dot(p.support(d));
+    const double band = kTieBand * overlap;
+    for (const Vec3& v : p.shape->vertices) {
+        const Vec3 x = p.x + p.q * v;
+        const double w = 1.0 - (top - d.dot(x)) / band;
+        if (w > 0.0) {
+            out.emplace_back(x, w);
+        }
+    }
+}
+
+/// Contact point of two polyhedra with overlap delta along the unit normal m (from b to a): a
+/// point of the line, along m, through the point where the gradient of the overlap
+/// h_a(-m) + h_b(m) acts (Danskin), so the pair force is conservative and, being applied at one
+/// point for both bodies, keeps the angular momentum. A vertex of a against a face of b: that
+/// vertex; a vertex of b: that vertex; two crossing edges: the closest points of the edges. The
+/// point is put half way through the overlap. An edge lying on a face: the band-weighted average
+/// of its two vertices (continuous into the single vertex as it tilts). Parallel faces keep the
+/// patch centroid `patch_point`: the overlap is not differentiable there.
+Vec3 pair_point(const geometry::PosedPolyhedron& a, const geometry::PosedPolyhedron& b,
+                const Vec3& m, double delta, const Vec3& patch_point) {
+    thread_local std::vector<std::pair<Vec3, double>> va;
+    thread_local std::vector<std::pair<Vec3, double>> vb;
+    near_support(a, -m, delta, va);
+    near_support(b, m, delta, vb);
+    const auto average = [](const std::vector<std::pair<Vec3, double>>& v) {
+        Vec3 sum = Vec3::Zero();
+        double wsum = 0.0;
+        for (const auto& [x, w] : v) {
+            sum += w * x;
+            wsum += w;
+        }
+        return Vec3(sum / wsum);
+    };
+    if (va.size() == 1) {
+        return va[0].first + 0.5 * delta * m;
+    }
+    if (vb.size() == 1) {
+        return vb[0].first - 0.5 * delta * m;
+    }
+    if (va.size() == 2 && vb.size() == 2) {
+        // Two edges: the closest points of the segments (Ericson 2005, Sec. 5.1.9, without the
+        // parallel case: parallel edges keep the weighted averages).
+        const Vec3 p1 = va[0].first;
+        const Vec3 d1 = va[1].first - p1;
+        const Vec3 p2 = vb[0].first;
+        const Vec3 d2 = vb[1].first - p2;
+        const Vec3 r = p1 - p2;
+        const double aa = d1.squaredNorm();
+        const double ee = d2.squaredNorm();
+        const double bb = d1.dot(d2);
+        const double denom = aa * ee - bb * bb;
+        if (denom > 1e-12 * aa * ee) {
+            const double c = d1.dot(r);
+            const double f = d2.dot(r);
+            const double s = std::clamp((bb * f - c * ee) / denom, 0.0, 1.0);
+            const double t = std::clamp((bb * s + f) / ee, 0.0, 1.0);
+            const double s2 = std::clamp((bb * t - c) / aa, 0.0, 1.0);
+            return 0.5 * (p1 + s2 * d1 + p2 + t * d2);
+        }
+        return 0.5 * (average(va) + average(vb));
+    }
+    // An edge lying on a face: its weighted vertices, which turn continuously into the single
+    // vertex when the edge tilts out of the band.
+    if (va.size() == 2) {
+        return average(va) + 0.5 * delta * m;
+    }
+    if (vb.size() == 2) {
+        return average(vb) - 0.5 * delta * m;
+    }
+    return patch_point;
+}
+
 /// Hertz radius of two polyhedra: the volume-equivalent spheres in series.
 double polyhedron_pair_radius(const Element& a, const Element& b) {
     return a.r_equiv * b.r_equiv / (a.r_equiv + b.r_equiv);
 }
 
 /// Two polyhedron elements: fast common plane (default) or libccd GJK/EPA with the common-plane
-/// patch along EPA's normal. Normal from b to a; point = patch centroid.
+/// patch along EPA's normal. Normal from b to a; point: pair_point.
 ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase method) {
     ElementContact out;
     const geometry::PosedPolyhedron pa{a.poly, a.centre, a.q};
@@ -263,7 +345,7 @@ ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase m
     out.touching = true;
     out.overlap = pc.depth;
     out.normal = pc.normal;
-    out.point = pc.point;
+    out.point = pair_point(pa, pb, pc.normal, pc.depth, pc.point);
     out.r_eff = polyhedron_pair_radius(a, b);
     return out;
 }
@@ -301,8 +383,43 @@ Vec3 wall_deepest(const Support& support, const Element& a, const WallShape& w,
     return deepest;
 }
 
-/// Depth band, as a fraction of the overlap, within which vertices share the contact point.
-constexpr double kTieBand = 0.02;
+/// Polyhedron element p against superquadric element s (normal from s to p): libccd GJK/EPA on
+/// the two support maps. The overlap is then re-evaluated exactly along EPA's normal from the
+/// analytic supports (an upper bound of the MTD, as the superquadric fallback does), so it does not
+/// carry EPA's tolerance. The polyhedron counts as flat at the contact (as for a sphere), so R* is
+/// the superquadric's, from its principal curvatures at its deepest point. A sphere element (a
+/// clump member) against a polyhedron never comes here (sphere_polyhedron is exact).
+ElementContact polyhedron_superquadric(const Element& p, const Element& s, const Vec3* warm) {
+    ElementContact out;
+    const geometry::PosedPolyhedron pp{p.poly, p.centre, p.q};
+    const geometry::PosedSuperquadric ps{s.sq, s.centre, s.q};
+    const auto along = [&](const Vec3& n) { return n.dot(ps.support(n)) - n.dot(pp.support(-n)); };
+    // Separating-axis shortcuts: the line of centres and the last normal.
+    const Vec3 line = p.centre - s.centre;
+    if (line.squaredNorm() > 0.0 && along(line.normalized()) < 0.0) {
+        return out;
+    }
+    if (warm != nullptr && along(*warm) < 0.0) {
+        return out;
+    }
+    const geometry::ConvexContact cc = geometry::ccd_contact(pp, ps, false);
+    out.converged = cc.converged;
+    if (!cc.converged || !cc.touching) {
+        return out;
+    }
+    const double depth = along(cc.normal);
+    if (!(depth > 0.0)) {
+        return out;
+    }
+    out.touching = true;
+    out.overlap = depth;
+    out.normal = cc.normal;
+    const Vec3 deepest_s = ps.support(cc.normal);
+    out.point = 0.5 * (pp.support(-cc.normal) + deepest_s);
+    const auto k = s.sq->principal_curvatures(s.q.conjugate() * (deepest_s - s.centre));
+    out.r_eff = effective_radius(k[0], k[1], s, &p);
+    return out;
+}
 
 /// Contact point of a polyhedron on a wall: the deepest vertex, or, when several vertices are
 /// almost equally deep (a face or an edge lying on the wall), their average weighted by
@@ -429,10 +546,13 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
         c.normal = -c.normal;
         return c;
     }
-    if (poly_a || poly_b) {
-        // Polyhedron-superquadric: refused when the scene is built (System::add_body).
-        ElementContact c;
-        c.converged = false;
+    if (poly_a) {
+        return polyhedron_superquadric(a, b, warm);
+    }
+    if (poly_b) {
+        const Vec3 back = warm != nullptr ? Vec3(-*warm) : Vec3::Zero();
+        ElementContact c = polyhedron_superquadric(b, a, warm != nullptr ? &back : nullptr);
+        c.normal = -c.normal;
         return c;
     }
     const SphereAsSuperquadric sa(a.radius);
@@ -499,6 +619,18 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
     const geometry::ContactCurvature k = geometry::contact_curvature(pa, pb, cc);
     out.r_eff = effective_radius(k.k_min, k.k_max, a, &b);
     return out;
+}
+
+double flat_wall_radius(const Element& a, const Vec3& n) {
+    if (a.kind == Element::Kind::polyhedron) {
+        return a.r_equiv;
+    }
+    if (a.kind == Element::Kind::sphere) {
+        return a.radius;
+    }
+    const geometry::PosedSuperquadric p{a.sq, a.centre, a.q};
+    const auto k = a.sq->principal_curvatures(a.q.conjugate() * (p.support(-n) - a.centre));
+    return effective_radius(k[0], k[1], a, nullptr);
 }
 
 ElementContact element_wall_contact(const Element& a, const WallShape& w) {

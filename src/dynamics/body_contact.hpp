@@ -4,8 +4,8 @@
 // element. Element pairs are dispatched by kind: sphere-sphere analytically, anything with a convex
 // element through the support-map narrow phase (geometry/convex_contact.hpp); a convex polyhedron
 // is one element of its own kind: polyhedron pairs by the fast common plane (or libccd GJK/EPA),
-// a sphere against a polyhedron by the exact closest feature (geometry/polyhedron_contact.hpp).
-// Polyhedron-superquadric pairs are refused when the scene is built (System::add_body).
+// a sphere against a polyhedron by the exact closest feature (geometry/polyhedron_contact.hpp),
+// a polyhedron against a superquadric by libccd GJK/EPA (whatever the narrow-phase setting).
 //
 // Normal convention: `normal` points from element b to element a (world frame), as in
 // convex_contact.hpp; moving a by overlap * normal separates the two.
@@ -94,6 +94,11 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
 /// Contact of two elements; `warm` is the previous normal (b to a) or nullptr.
 [[nodiscard]] ElementContact element_contact(const Element& a, const Element& b, NarrowPhase method,
                                              const Vec3* warm);
+
+/// Effective radius (m) of element a against a flat wall of unit normal n (from the wall to a,
+/// world frame): a sphere's radius, a polyhedron's equivalent radius, a superquadric's R* at its
+/// deepest point (as element_wall_contact on a plane).
+[[nodiscard]] double flat_wall_radius(const Element& a, const Vec3& n);
 
 /// Contact of an element with a wall (normal from the wall into the element). A polyhedron's
 /// contact point is its deepest vertex, or the weighted average of the almost equally deep ones.

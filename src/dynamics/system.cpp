@@ -38,7 +38,13 @@ System::System(const SceneSpec& spec)
     if (spec_.skin <= 0.0) {
         double rmax = 0.0;
         for (const auto& ps : spec_.particles) {
-            rmax = std::max(rmax, ps.radius);
+            // A body's ParticleSpec radius is unused (0 from a case file): its template's
+            // bounding radius is its size. Without it a scene of bodies had a zero skin and
+            // rebuilt its neighbour list at every step.
+            rmax = std::max(
+                rmax, ps.shape >= 0
+                          ? spec_.shapes.at(static_cast<std::size_t>(ps.shape)).bounding_radius()
+                          : ps.radius);
         }
         for (const auto& ins : spec_.inserts) {
             rmax = std::max(rmax, ins.size.largest());
@@ -80,23 +86,6 @@ std::size_t System::add_particle(int material, double radius, const Vec3& x, con
 std::size_t System::add_body(int material, int shape, const Vec3& x, const Vec3& v,
                              const Vec3& omega, const Quat& q) {
     const geometry::ShapeTemplate& t = spec_.shapes.at(static_cast<std::size_t>(shape));
-    const bool poly = std::holds_alternative<geometry::ConvexPolyhedron>(t.shape);
-    const bool sq = std::holds_alternative<geometry::Superquadric>(t.shape);
-    if ((poly && has_superquadrics_) || (sq && has_polyhedra_)) {
-        throw InputError("", 0, "shape",
-                         fmt::format("\"{}\": polyhedra and superquadrics in one scene are not yet "
-                                     "supported (their pair contact is not wired)",
-                                     t.name));
-    }
-    if (sq && !spec_.mesh_walls.empty()) {
-        throw InputError(
-            "", 0, "shape",
-            fmt::format("\"{}\" is a superquadric; superquadrics against mesh walls are "
-                        "not yet supported (spheres, clumps and polyhedra are)",
-                        t.name));
-    }
-    has_polyhedra_ = has_polyhedra_ || poly;
-    has_superquadrics_ = has_superquadrics_ || sq;
     const double rho = spec_.materials.at(static_cast<std::size_t>(material)).density;
     const std::size_t i = p_.add_body(next_id_++, material, shape, t.bounding_radius(), t.mass(rho),
                                       t.inertia(rho), x, v, q, omega);

@@ -126,8 +126,7 @@ class System {
                              const Vec3& omega);
     /// Adds one rigid body of template `shape` (index into SceneSpec::shapes) at centre of mass x
     /// (m, world), velocity v (m/s, world), angular velocity omega (rad/s, world) and orientation
-    /// q (body -> world); returns its index. Throws InputError for a polyhedron in a scene with
-    /// superquadrics (not yet supported) and for a superquadric with mesh walls.
+    /// q (body -> world); returns its index.
     std::size_t add_body(int material, int shape, const Vec3& x, const Vec3& v, const Vec3& omega,
                          const Quat& q);
     /// True when the scene holds non-spherical particles.
@@ -201,8 +200,6 @@ class System {
     std::vector<std::uint32_t> element_begin_; // particle i: [begin[i], begin[i + 1])
     // Polyhedron features per template (empty for other shapes), built once in the constructor.
     std::vector<geometry::PolyhedronFeatures> poly_features_;
-    bool has_superquadrics_ = false; // a superquadric was added (refused with polyhedra, meshes)
-    bool has_polyhedra_ = false;     // a polyhedron was added
     std::vector<geometry::MeshContact> mesh_buf_; // scratch of mesh-wall queries
     /// True when contacts go through body_forces (bodies or mesh walls present).
     [[nodiscard]] bool generic_contacts() const { return has_bodies_ || !spec_.mesh_walls.empty(); }

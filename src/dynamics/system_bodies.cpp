@@ -217,7 +217,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         } else if (A.kind == Element::Kind::sphere) {
                             mw.mesh->sphere_contacts(A.centre, A.radius, mesh_buf_);
                         } else {
-                            continue; // superquadrics are refused with mesh walls (add_body)
+                            ++np_.calls;
+                            np_.failures += mw.mesh->superquadric_contacts({A.sq, A.centre, A.q},
+                                                                           A.radius, mesh_buf_);
                         }
                         for (const geometry::MeshContact& mc : mesh_buf_) {
                             ElementContact ec;
@@ -225,8 +227,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                             ec.overlap = mc.depth;
                             ec.normal = mc.normal;
                             ec.point = mc.point;
-                            // Flat wall: sphere radius, or the polyhedron's equivalent sphere.
-                            ec.r_eff = A.kind == Element::Kind::polyhedron ? A.r_equiv : A.radius;
+                            // Flat wall: sphere radius, the polyhedron's equivalent sphere, or
+                            // the superquadric's R* at its deepest point.
+                            ec.r_eff = flat_wall_radius(A, mc.normal);
                             const BodyContactKey key{
                                 p_.id[a], -1 - n_walls - static_cast<std::int64_t>(m),
                                 static_cast<std::int32_t>(ea - a0),

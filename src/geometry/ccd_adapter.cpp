@@ -1,6 +1,7 @@
 // Adapter to libccd (GJK + EPA and MPR on support maps); the only kiln file including libccd.
-// Coordinates are shifted to the midpoint of the centres and scaled by the sum of the largest
-// half-axes, so libccd's absolute tolerances become relative ones.
+// Coordinates are shifted to an origin near the contact and scaled by a length of the bodies, so
+// libccd's absolute tolerances become relative ones. One template serves every pair of posed
+// shapes with a world-frame `support(d)` and a centre `x`.
 
 #include "geometry/convex_contact.hpp"
 #include "geometry/polyhedron_contact.hpp"
@@ -11,15 +12,15 @@ namespace kiln::geometry {
 
 namespace {
 
-/// What libccd's callbacks see: one body and the scaling of the query.
-struct CcdBody {
-    const PosedSuperquadric* body;
+/// What libccd's callbacks see: one body and the shift and scaling of the query.
+template <class Body> struct CcdBody {
+    const Body* body;
     Vec3 origin;
     double scale;
 };
 
-void ccd_support(const void* obj, const ccd_vec3_t* dir, ccd_vec3_t* out) {
-    const auto* b = static_cast<const CcdBody*>(obj);
+template <class Body> void ccd_support(const void* obj, const ccd_vec3_t* dir, ccd_vec3_t* out) {
+    const auto* b = static_cast<const CcdBody<Body>*>(obj);
     const Vec3 d(dir->v[0], dir->v[1], dir->v[2]);
     const Vec3 s = (b->body->support(d) - b->origin) / b->scale;
     out->v[0] = s.x();
@@ -27,8 +28,8 @@ void ccd_support(const void* obj, const ccd_vec3_t* dir, ccd_vec3_t* out) {
     out->v[2] = s.z();
 }
 
-void ccd_centre(const void* obj, ccd_vec3_t* c) {
-    const auto* b = static_cast<const CcdBody*>(obj);
+template <class Body> void ccd_centre(const void* obj, ccd_vec3_t* c) {
+    const auto* b = static_cast<const CcdBody<Body>*>(obj);
     const Vec3 s = (b->body->x - b->origin) / b->scale;
     c->v[0] = s.x();
     c->v[1] = s.y();
@@ -41,87 +42,20 @@ constexpr unsigned long kMaxIterations = 1000; // GJK and MPR iterations before 
 // loop forever on some superquadric pairs (it has no iteration limit); 1e-10 ran 2000 random
 // pairs in 0.3 s. MPR and GJK use lengths.
 constexpr double kEpaTolerance = 1e-10;
-constexpr double kTolerance = 1e-10; // relative to the sum of the largest half-axes
+constexpr double kTolerance = 1e-10; // relative to the length scale of the query
 
-} // namespace
-
-ConvexContact ccd_contact(const PosedSuperquadric& a, const PosedSuperquadric& b, bool use_mpr) {
-    const double scale = a.length_scale() + b.length_scale();
-    const Vec3 origin = 0.5 * (a.x + b.x);
-    const CcdBody ca{&a, origin, scale};
-    const CcdBody cb{&b, origin, scale};
+/// GJK + EPA (use_mpr = false) or MPR of bodies a and b in coordinates (x - origin) / scale.
+/// Normal from b to a, world frame; the point is the midpoint of the deepest points along it.
+template <class A, class B>
+ConvexContact query(const A& a, const B& b, const Vec3& origin, double scale, bool use_mpr) {
+    const CcdBody<A> ca{&a, origin, scale};
+    const CcdBody<B> cb{&b, origin, scale};
     ccd_t ccd;
     CCD_INIT(&ccd);
-    ccd.support1 = ccd_support;
-    ccd.support2 = ccd_support;
-    ccd.center1 = ccd_centre;
-    ccd.center2 = ccd_centre;
-    ccd.max_iterations = kMaxIterations;
-    ccd.epa_tolerance = kEpaTolerance;
-    ccd.mpr_tolerance = kTolerance;
-    ccd.dist_tolerance = kTolerance;
-    ccd_real_t depth = 0;
-    ccd_vec3_t dir;
-    ccd_vec3_t pos;
-    const int rc = use_mpr ? ccdMPRPenetration(&ca, &cb, &ccd, &depth, &dir, &pos)
-                           : ccdGJKPenetration(&ca, &cb, &ccd, &depth, &dir, &pos);
-    ConvexContact c;
-    if (rc == -1) {
-        c.touching = false;
-        return c;
-    }
-    if (rc != 0) {
-        c.converged = false;
-        return c;
-    }
-    c.touching = true;
-    c.depth = depth * scale;
-    // libccd's dir moves B out of A, i.e. points from A to B.
-    c.normal = -Vec3(dir.v[0], dir.v[1], dir.v[2]).normalized();
-    c.point = 0.5 * (a.support(-c.normal) + b.support(c.normal));
-    return c;
-}
-
-// Convex polyhedra: the same queries on the vertex support maps, shifted to the midpoint of the
-// centres and scaled by the sum of the bounding radii.
-namespace {
-
-struct CcdPolyhedron {
-    const PosedPolyhedron* body;
-    Vec3 origin;
-    double scale;
-};
-
-void ccd_poly_support(const void* obj, const ccd_vec3_t* dir, ccd_vec3_t* out) {
-    const auto* b = static_cast<const CcdPolyhedron*>(obj);
-    const Vec3 d(dir->v[0], dir->v[1], dir->v[2]);
-    const Vec3 s = (b->body->support(d) - b->origin) / b->scale;
-    out->v[0] = s.x();
-    out->v[1] = s.y();
-    out->v[2] = s.z();
-}
-
-void ccd_poly_centre(const void* obj, ccd_vec3_t* c) {
-    const auto* b = static_cast<const CcdPolyhedron*>(obj);
-    const Vec3 s = (b->body->x - b->origin) / b->scale;
-    c->v[0] = s.x();
-    c->v[1] = s.y();
-    c->v[2] = s.z();
-}
-
-} // namespace
-
-ConvexContact ccd_contact(const PosedPolyhedron& a, const PosedPolyhedron& b, bool use_mpr) {
-    const double scale = a.length_scale() + b.length_scale();
-    const Vec3 origin = 0.5 * (a.x + b.x);
-    const CcdPolyhedron ca{&a, origin, scale};
-    const CcdPolyhedron cb{&b, origin, scale};
-    ccd_t ccd;
-    CCD_INIT(&ccd);
-    ccd.support1 = ccd_poly_support;
-    ccd.support2 = ccd_poly_support;
-    ccd.center1 = ccd_poly_centre;
-    ccd.center2 = ccd_poly_centre;
+    ccd.support1 = ccd_support<A>;
+    ccd.support2 = ccd_support<B>;
+    ccd.center1 = ccd_centre<A>;
+    ccd.center2 = ccd_centre<B>;
     ccd.max_iterations = kMaxIterations;
     ccd.epa_tolerance = kEpaTolerance;
     ccd.mpr_tolerance = kTolerance;
@@ -144,6 +78,30 @@ ConvexContact ccd_contact(const PosedPolyhedron& a, const PosedPolyhedron& b, bo
     c.normal = -Vec3(dir.v[0], dir.v[1], dir.v[2]).normalized(); // libccd's dir points from A to B
     c.point = 0.5 * (a.support(-c.normal) + b.support(c.normal));
     return c;
+}
+
+/// Shift to the midpoint of the centres, scale by the sum of the length scales.
+template <class A, class B> ConvexContact centred_query(const A& a, const B& b, bool use_mpr) {
+    return query(a, b, 0.5 * (a.x + b.x), a.length_scale() + b.length_scale(), use_mpr);
+}
+
+} // namespace
+
+ConvexContact ccd_contact(const PosedSuperquadric& a, const PosedSuperquadric& b, bool use_mpr) {
+    return centred_query(a, b, use_mpr);
+}
+
+ConvexContact ccd_contact(const PosedPolyhedron& a, const PosedPolyhedron& b, bool use_mpr) {
+    return centred_query(a, b, use_mpr);
+}
+
+ConvexContact ccd_contact(const PosedPolyhedron& a, const PosedSuperquadric& b, bool use_mpr) {
+    return centred_query(a, b, use_mpr);
+}
+
+ConvexContact ccd_contact(const PosedSuperquadric& a, const SupportTriangle& b, bool use_mpr) {
+    // A wall triangle may be much larger than the particle: the particle sets origin and scale.
+    return query(a, b, a.x, 2.0 * a.length_scale(), use_mpr);
 }
 
 } // namespace kiln::geometry

@@ -18,6 +18,8 @@
 #include "core/types.hpp"
 #include "geometry/superquadric.hpp"
 
+#include <array>
+
 namespace kiln::geometry {
 
 /// A superquadric placed in the world: centre x (m) and orientation q (body -> world).
@@ -73,6 +75,26 @@ contact_curvature(const PosedSuperquadric& a, const PosedSuperquadric& b, const 
 
 /// libccd adapter (ccd_adapter.cpp, the only file that includes libccd): kCcdEpa or kCcdMpr.
 [[nodiscard]] ConvexContact ccd_contact(const PosedSuperquadric& a, const PosedSuperquadric& b,
+                                        bool use_mpr);
+
+/// A triangle (world frame) as a support map, for a particle against one triangle of a mesh wall.
+struct SupportTriangle {
+    std::array<Vec3, 3> v; ///< corners (m), world frame
+    Vec3 x;                ///< centroid (m), world frame
+
+    /// Support point (m, world frame): the corner maximising d . x for a world direction d.
+    [[nodiscard]] Vec3 support(const Vec3& d) const {
+        const double a = d.dot(v[0]);
+        const double b = d.dot(v[1]);
+        const double c = d.dot(v[2]);
+        return a >= b ? (a >= c ? v[0] : v[2]) : (b >= c ? v[1] : v[2]);
+    }
+};
+
+/// libccd GJK + EPA (use_mpr = false) or MPR of a superquadric a and a triangle b; normal from the
+/// triangle to a (world frame). Origin and scale are a's, so a large triangle does not coarsen the
+/// tolerance.
+[[nodiscard]] ConvexContact ccd_contact(const PosedSuperquadric& a, const SupportTriangle& b,
                                         bool use_mpr);
 
 /// Newton's method on the sphere of directions (convex_contact.cpp). Without `warm_normal` it

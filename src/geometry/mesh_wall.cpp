@@ -604,3 +604,138 @@ void MeshWall::polyhedron_contacts(const PosedPolyhedron& p, std::vector<MeshCon
 }
 
 } // namespace kiln::geometry
+
+namespace kiln::geometry {
+
+namespace {
+
+/// Corners of a triangle within this fraction of its longest edge of its support along a contact
+/// normal belong to the touched feature (EPA's normal is accurate to ~1e-5 of the length scale).
+constexpr double kTie = 1e-3;
+
+} // namespace
+
+int MeshWall::superquadric_contacts(const PosedSuperquadric& s, double r,
+                                    std::vector<MeshContact>& out) const {
+    out.clear();
+    thread_local std::vector<int> tris;
+    candidates(s.x - Vec3::Constant(r), s.x + Vec3::Constant(r), tris);
+    thread_local std::vector<MeshContact> edges;
+    thread_local std::vector<MeshContact> verts;
+    edges.clear();
+    verts.clear();
+    int failures = 0;
+    // Facets with a plane contact (the deep point over one of their triangles): the other
+    // triangles of such a facet can only add contacts on that plane, which the thinning drops, so
+    // their GJK/EPA queries are skipped.
+    thread_local std::vector<int> plane_facets;
+    plane_facets.clear();
+    for (const int t : tris) {
+        const Vec3& n = normals_[static_cast<std::size_t>(t)];
+        const auto c = corners(t);
+        const Vec3 deep = s.support(-n);
+        if (n.dot(s.x - c[0]) > 0.0 && n.dot(c[0] - deep) > 0.0) {
+            int region = 0;
+            const Vec3 foot = deep + n.dot(c[0] - deep) * n;
+            if ((foot - closest_on_triangle(deep, c[0], c[1], c[2], region)).norm() <=
+                kOnEdge * r) {
+                plane_facets.push_back(facet_of_[static_cast<std::size_t>(t)]);
+            }
+        }
+    }
+    const auto on_plane_facet = [&](int t) {
+        return std::find(plane_facets.begin(), plane_facets.end(),
+                         facet_of_[static_cast<std::size_t>(t)]) != plane_facets.end();
+    };
+    for (const int t : tris) {
+        const Vec3& n = normals_[static_cast<std::size_t>(t)];
+        const auto c = corners(t);
+        if (n.dot(s.x - c[0]) <= 0.0) {
+            continue; // centre behind the one-sided wall
+        }
+        const Vec3 deep = s.support(-n);
+        const double plane_depth = n.dot(c[0] - deep);
+        if (!(plane_depth > 0.0)) {
+            continue;
+        }
+        int region = 0;
+        const Vec3 q = closest_on_triangle(deep, c[0], c[1], c[2], region);
+        const Vec3 foot = deep + plane_depth * n; // deep point projected on the plane
+        MeshContact m;
+        const bool over = (foot - q).norm() <= kOnEdge * r;
+        if (!over && on_plane_facet(t)) {
+            continue;
+        }
+        if (over) {
+            // Over the triangle or its boundary: the plane's contact.
+            m.normal = n;
+            m.depth = plane_depth;
+            m.point = foot;
+            m.patch_area = 1.0; // represents the plane (see thin)
+        } else {
+            const SupportTriangle tri{c, (c[0] + c[1] + c[2]) / 3.0};
+            const ConvexContact cc = ccd_contact(s, tri, false);
+            if (!cc.converged) {
+                ++failures;
+                continue;
+            }
+            if (!cc.touching || cc.normal.dot(n) <= 0.0) {
+                continue; // apart, or pushed through the back of the one-sided wall
+            }
+            const Vec3& nc = cc.normal;
+            const double depth = nc.dot(tri.support(nc)) - nc.dot(s.support(-nc));
+            if (!(depth > 0.0)) {
+                continue;
+            }
+            const double top = std::max({nc.dot(c[0]), nc.dot(c[1]), nc.dot(c[2])});
+            const double edge_max =
+                std::max({(c[1] - c[0]).norm(), (c[2] - c[1]).norm(), (c[0] - c[2]).norm()});
+            std::array<int, 3> hit{};
+            int n_hit = 0;
+            for (int k = 0; k < 3; ++k) {
+                if (top - nc.dot(c[static_cast<std::size_t>(k)]) <= kTie * edge_max) {
+                    hit[static_cast<std::size_t>(n_hit++)] = k;
+                }
+            }
+            m.normal = nc;
+            m.depth = depth;
+            m.patch_area = 0.0;
+            if (n_hit == 1) {
+                region = 4 + hit[0];
+                m.point = c[static_cast<std::size_t>(hit[0])];
+            } else if (n_hit == 2) {
+                // Edge k runs from corner k to k + 1: corners {0, 1} -> 0, {1, 2} -> 1, {0, 2}
+                // -> 2.
+                const int k = hit[1] - hit[0] == 2 ? 2 : hit[0];
+                region = 1 + k;
+                const Vec3& e0 = c[static_cast<std::size_t>(k)];
+                const Vec3 e = c[static_cast<std::size_t>((k + 1) % 3)] - e0;
+                const Vec3 touch = s.support(-nc) + depth * nc;
+                m.point = e0 + std::clamp(e.dot(touch - e0) / e.squaredNorm(), 0.0, 1.0) * e;
+            } else {
+                // Normal along the triangle's: the boundary feature nearest to the deep point.
+                m.point = q;
+            }
+        }
+        if (region == 0) {
+            m.feature = MeshFeature::kFace;
+            m.id = t;
+            out.push_back(m);
+        } else if (region <= 3) {
+            m.feature = MeshFeature::kEdge;
+            m.id = tri_edges_[static_cast<std::size_t>(t)][static_cast<std::size_t>(region - 1)];
+            edges.push_back(m);
+        } else {
+            m.feature = MeshFeature::kVertex;
+            m.id = triangles_[static_cast<std::size_t>(t)][static_cast<std::size_t>(region - 4)];
+            verts.push_back(m);
+        }
+    }
+    thin(out, edges, verts, r);
+    for (MeshContact& m : out) {
+        m.point -= 0.5 * m.depth * m.normal; // half way through the overlap, as on analytic walls
+    }
+    return failures;
+}
+
+} // namespace kiln::geometry

@@ -20,8 +20,18 @@
 // clipped to each triangle's prism and of the prism's corner lines clipped to the body), so a body
 // sliding across the edges inside a facet keeps its overlap. The patch is the section of the body
 // half way through the overlap clipped by the facet's triangles; the contact point is its centroid.
+//
+// Superquadrics: triangle by triangle, the deepest point s of the body below the triangle's plane
+// (its support point against the normal). When s lies over the triangle, the contact is a face
+// contact with the triangle normal and the plane depth (exactly the analytic plane's contact);
+// when it lies over the triangle's boundary, an edge or vertex contact with the same normal and
+// depth; otherwise the body may still overlap the triangle across an edge or a vertex, which
+// libccd GJK/EPA between the triangle's and the body's support maps decides (the feature is the
+// triangle's support along EPA's normal; the overlap is re-evaluated exactly along that normal).
+// The contacts are then thinned by the same feature hierarchy as the sphere contacts.
 
 #include "core/types.hpp"
+#include "geometry/convex_contact.hpp"
 #include "geometry/polyhedron_contact.hpp"
 
 #include <array>
@@ -32,9 +42,9 @@ namespace kiln::geometry {
 
 /// Which feature of the mesh a contact is with.
 enum class MeshFeature {
-    kFace,   ///< inside a triangle (sphere)
-    kEdge,   ///< on a triangle edge (sphere)
-    kVertex, ///< at a vertex (sphere)
+    kFace,   ///< inside a triangle (sphere, superquadric)
+    kEdge,   ///< on a triangle edge (sphere, superquadric)
+    kVertex, ///< at a vertex (sphere, superquadric)
     kFacet,  ///< a set of coplanar triangles (polyhedron)
 };
 
@@ -61,6 +71,11 @@ class MeshWall {
     void sphere_contacts(const Vec3& c, double r, std::vector<MeshContact>& out) const;
     /// Contacts of a posed convex polyhedron (one per touched facet); `out` is cleared first.
     void polyhedron_contacts(const PosedPolyhedron& p, std::vector<MeshContact>& out) const;
+    /// Contacts of a posed superquadric of bounding radius r (m), world frame (face, edge and
+    /// vertex contacts thinned as for spheres); `out` is cleared first. Returns the number of
+    /// triangles whose libccd query did not converge (those contacts are skipped).
+    int superquadric_contacts(const PosedSuperquadric& s, double r,
+                              std::vector<MeshContact>& out) const;
 
     /// Signed distance of a point x (m, world) from the nearest triangle (m): positive on the side
     /// the normals point to (the particles' side). Brute force over all triangles: for set-up

@@ -11,7 +11,7 @@
 
 namespace kiln::geometry {
 
-Vec3 ConvexPolyhedron::support(const Vec3& d_body) const {
+Vec3 farthest_vertex(const std::vector<Vec3>& vertices, const Vec3& d_body) {
     KILN_ASSERT(!vertices.empty());
     std::size_t best = 0;
     double best_dot = vertices[0].dot(d_body);
@@ -23,6 +23,10 @@ Vec3 ConvexPolyhedron::support(const Vec3& d_body) const {
         }
     }
     return vertices[best];
+}
+
+Vec3 ConvexPolyhedron::support(const Vec3& d_body) const {
+    return farthest_vertex(vertices, d_body);
 }
 
 namespace {

@@ -15,6 +15,10 @@
 
 namespace kiln::geometry {
 
+/// The point of `vertices` (any frame; not empty) maximising d . x for a direction d in the same
+/// frame: the support map of their convex hull (the first of equal ones).
+[[nodiscard]] Vec3 farthest_vertex(const std::vector<Vec3>& vertices, const Vec3& d);
+
 /// Convex polyhedron in its body frame (principal axes, origin at the centre of mass).
 struct ConvexPolyhedron {
     std::vector<Vec3> vertices;               ///< vertex positions (m), body frame

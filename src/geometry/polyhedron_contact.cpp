@@ -14,17 +14,7 @@
 namespace kiln::geometry {
 
 Vec3 PolyhedronFeatures::support(const Vec3& d_body) const {
-    KILN_ASSERT(!vertices.empty());
-    std::size_t best = 0;
-    double best_dot = vertices[0].dot(d_body);
-    for (std::size_t i = 1; i < vertices.size(); ++i) {
-        const double s = vertices[i].dot(d_body);
-        if (s > best_dot) {
-            best_dot = s;
-            best = i;
-        }
-    }
-    return vertices[best];
+    return farthest_vertex(vertices, d_body);
 }
 
 namespace {

@@ -105,4 +105,9 @@ polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b, bool with
 [[nodiscard]] ConvexContact ccd_contact(const PosedPolyhedron& a, const PosedPolyhedron& b,
                                         bool use_mpr);
 
+/// libccd GJK + EPA or MPR of a polyhedron a and a superquadric b (normal from b to a, world
+/// frame).
+[[nodiscard]] ConvexContact ccd_contact(const PosedPolyhedron& a, const PosedSuperquadric& b,
+                                        bool use_mpr);
+
 } // namespace kiln::geometry

@@ -636,27 +636,6 @@ int read_shape(Section& s, CaseSpec& c, ShapeTable& shapes) {
         s.fail_at("shape", e.what());
     }
     geometry::ShapeTemplate t = read_shape_file(file);
-    const auto holds = [&](auto tag) {
-        return std::any_of(c.scene.shapes.begin(), c.scene.shapes.end(), [](const auto& u) {
-            return std::holds_alternative<decltype(tag)>(u.shape);
-        });
-    };
-    const bool is_sq = std::holds_alternative<geometry::Superquadric>(t.shape);
-    const bool is_poly = std::holds_alternative<geometry::ConvexPolyhedron>(t.shape);
-    if ((is_poly && holds(geometry::Superquadric{})) ||
-        (is_sq && holds(geometry::ConvexPolyhedron{}))) {
-        s.fail_at("shape", fmt::format("\"{}\": polyhedra and superquadrics in one case are not "
-                                       "yet supported (their pair contact is not wired); allowed: "
-                                       "polyhedra with spheres and clumps, or superquadrics with "
-                                       "spheres and clumps",
-                                       name));
-    }
-    if (is_sq && !c.scene.mesh_walls.empty()) {
-        s.fail_at("shape", fmt::format("\"{}\" is a superquadric; superquadrics against mesh "
-                                       "walls are not yet supported (spheres, clumps and "
-                                       "polyhedra are)",
-                                       name));
-    }
     if (const auto* sq = std::get_if<geometry::Superquadric>(&t.shape)) {
         const double aspect = sq->half_axes.maxCoeff() / sq->half_axes.minCoeff();
         if (aspect > kMaxAspect * (1.0 + 1e-12)) {

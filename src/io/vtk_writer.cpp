@@ -1,6 +1,7 @@
 #include "io/vtk_writer.hpp"
 
 #include "core/error.hpp"
+#include "geometry/mesh_wall.hpp"
 #include "io/files.hpp"
 
 #include <vtkCellArray.h>
@@ -401,6 +402,21 @@ void ParticleSeriesWriter::write_walls(const dynamics::SceneSpec& scene,
             wall_index->InsertNextValue(static_cast<int>(k));
         }
         names->InsertNextValue(w.name);
+    }
+    // Mesh walls: their own triangles, wall index walls.size() + mesh index (the contact records'
+    // numbering).
+    for (std::size_t m = 0; m < scene.mesh_walls.size(); ++m) {
+        const dynamics::MeshWallSpec& mw = scene.mesh_walls[m];
+        const vtkIdType base = pts->GetNumberOfPoints();
+        for (const Vec3& v : mw.mesh->vertices()) {
+            pts->InsertNextPoint(v.x(), v.y(), v.z());
+        }
+        for (const auto& t : mw.mesh->triangles()) {
+            const vtkIdType ids[3] = {base + t[0], base + t[1], base + t[2]};
+            polys->InsertNextCell(3, ids);
+            wall_index->InsertNextValue(static_cast<int>(scene.walls.size() + m));
+        }
+        names->InsertNextValue(mw.name);
     }
     vtkNew<vtkPolyData> pd;
     pd->SetPoints(pts);

@@ -35,8 +35,10 @@ class ParticleSeriesWriter {
     void write(const dynamics::System& sys);
 
     /// Writes the walls of `scene` to `file` (.vtp): planes as rectangles covering the particle
-    /// region enlarged by 20 %, cylinders as open 48-sided tubes over that region (m, world frame).
-    /// Cell data "wall" is the wall index. Throws InputError when the file cannot be written.
+    /// region enlarged by 20 %, cylinders as open 48-sided tubes over that region, mesh walls as
+    /// their triangles (m, world frame). Cell data "wall" is the wall index (mesh walls after the
+    /// analytic ones); field data "wall_name" lists the names in that order. Throws InputError when
+    /// the file cannot be written.
     void write_walls(const dynamics::SceneSpec& scene, const std::filesystem::path& file) const;
 
     /// Temperatures written with every frame from now on (point data temperature_mean,

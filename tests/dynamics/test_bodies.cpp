@@ -206,16 +206,5 @@ TEST(Bodies, CollectContactsListsBodyContactsWithBodyIndices) {
     EXPECT_GT(body_walls, 0);
 }
 
-TEST(Bodies, PolyhedraNextToSuperquadricsAreNotYetSupported) {
-    // Polyhedra run (tests/dynamics/test_polyhedra.cpp); their pair with a superquadric is not
-    // wired.
-    SceneSpec s = base_scene();
-    s.shapes.push_back(shape("cube"));
-    s.shapes.push_back(shape("ellipsoid_123"));
-    s.particles.push_back(body(0, Vec3::Zero()));
-    s.particles.push_back(body(1, Vec3(0.0, 0.0, 0.01)));
-    EXPECT_THROW(System{s}, InputError);
-}
-
 } // namespace
 } // namespace kiln::dynamics

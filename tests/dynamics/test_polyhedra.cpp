@@ -9,9 +9,13 @@
 #include "io/shape_reader.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <gtest/gtest.h>
+#include <limits>
 #include <memory>
+#include <numbers>
+#include <random>
 
 namespace kiln::dynamics {
 namespace {
@@ -159,15 +163,187 @@ TEST(Polyhedra, SphereOnAMeshFloorRestsAsOnAPlane) {
     EXPECT_NEAR(z[1], z[0], 1e-9); // same law, same overlap: equal to round-off of the settling
 }
 
-TEST(Polyhedra, SuperquadricsAgainstMeshWallsAreNotYetSupported) {
+TEST(Polyhedra, SuperquadricOnAMeshFloorRestsAsOnAPlane) {
+    // A tilted ellipsoid settles on the top face of an STL box (across the diagonal shared by its
+    // two triangles) and on an analytic plane: one contact, and the same height and attitude.
+    Vec3 x[2];
+    Quat q[2];
+    for (const int mesh : {0, 1}) {
+        SceneSpec s = base_scene();
+        s.gravity = Vec3(0, 0, -9.81);
+        if (mesh != 0) {
+            io::MeshInput m = io::read_mesh_file(
+                std::filesystem::path(KILN_SOURCE_DIR) / "shapes" / "wall_box_20mm.stl", 1e-3);
+            s.mesh_walls.push_back(
+                {"floor", std::make_shared<const geometry::MeshWall>(m.points, m.triangles, "box"),
+                 0});
+        } else {
+            s.walls.push_back({"floor", PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
+        }
+        s.shapes.push_back(shape("ellipsoid_123"));
+        const Quat q0(Eigen::AngleAxisd(1.2, Vec3(1, 0.3, 0).normalized()));
+        s.particles.push_back(
+            body(0, Vec3(0.5e-3, 0.5e-3, 3.2e-3), Vec3(0.01, 0.01, 0), Vec3::Zero(), q0));
+        System sys(s);
+        for (int k = 0; k < 40000; ++k) {
+            sys.step();
+        }
+        EXPECT_EQ(sys.counters().wall_contacts, 1) << mesh;
+        EXPECT_EQ(sys.narrow_phase_counters().failures, 0) << mesh;
+        x[mesh] = sys.particles().x[0];
+        q[mesh] = sys.particles().q[0];
+    }
+    // Same law, same overlap and lever arm: the paths agree to the round-off of the settling.
+    EXPECT_LT((x[1] - x[0]).norm(), 1e-9);
+    EXPECT_LT(q[1].angularDistance(q[0]), 1e-6);
+}
+
+TEST(Polyhedra, ClumpOnAMeshFloorRestsAsOnAPlane) {
+    // The 12-sphere cylinder clump settles on the top face of an STL box and on an analytic plane:
+    // the same contacts at the same height.
+    Vec3 x[2];
+    long contacts[2] = {0, 0};
+    for (const int mesh : {0, 1}) {
+        SceneSpec s = base_scene();
+        s.gravity = Vec3(0, 0, -9.81);
+        if (mesh != 0) {
+            io::MeshInput m = io::read_mesh_file(
+                std::filesystem::path(KILN_SOURCE_DIR) / "shapes" / "wall_box_20mm.stl", 1e-3);
+            s.mesh_walls.push_back(
+                {"floor", std::make_shared<const geometry::MeshWall>(m.points, m.triangles, "box"),
+                 0});
+        } else {
+            s.walls.push_back({"floor", PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
+        }
+        s.shapes.push_back(shape("cylinder_12"));
+        // The ParticleSpec radius is left unset, as a case file's body particle has it.
+        s.particles.push_back(body(0, Vec3(0.3e-3, 0.2e-3, 3.05e-3)));
+        System sys(s);
+        for (int k = 0; k < 30000; ++k) {
+            sys.step();
+        }
+        contacts[mesh] = sys.counters().wall_contacts;
+        x[mesh] = sys.particles().x[0];
+    }
+    // The template's principal frame lays the cylinder on its side: one sphere of each ring
+    // touches, on the plane and on the mesh alike.
+    EXPECT_EQ(contacts[0], 2);
+    EXPECT_EQ(contacts[1], contacts[0]);
+    EXPECT_LT((x[1] - x[0]).norm(), 1e-9); // same law, same overlaps: round-off of the settling
+    EXPECT_LT(x[1].z(), 3.0e-3);           // it came down onto its lower spheres (z = 3 mm)
+}
+
+namespace {
+
+/// Overlap of two posed convex shapes along unit n (from b to a): h_b(n) + h_a(-n) (m).
+template <class A, class B> double overlap_along(const A& a, const B& b, const Vec3& n) {
+    return n.dot(b.support(n)) - n.dot(a.support(-n));
+}
+
+/// Brute-force MTD of two convex shapes: the smallest overlap over a Fibonacci sphere of
+/// directions, refined by shrinking random steps (m); best_n receives the normal (b to a).
+template <class A, class B> double brute_mtd(const A& a, const B& b, Vec3& best_n) {
+    double best = std::numeric_limits<double>::infinity();
+    const int n_dirs = 20000;
+    for (int k = 0; k < n_dirs; ++k) {
+        const double z = 1.0 - (2.0 * k + 1.0) / n_dirs;
+        const double phi = k * std::numbers::pi * (3.0 - std::sqrt(5.0));
+        const Vec3 n(std::sqrt(1 - z * z) * std::cos(phi), std::sqrt(1 - z * z) * std::sin(phi), z);
+        const double d = overlap_along(a, b, n);
+        if (d < best) {
+            best = d;
+            best_n = n;
+        }
+    }
+    std::mt19937 rng(11);
+    std::normal_distribution<double> gauss;
+    for (double step = 0.03; step > 1e-8; step *= 0.85) {
+        for (int k = 0; k < 200; ++k) {
+            const Vec3 n = (best_n + step * Vec3(gauss(rng), gauss(rng), gauss(rng))).normalized();
+            const double d = overlap_along(a, b, n);
+            if (d < best) {
+                best = d;
+                best_n = n;
+            }
+        }
+    }
+    return best;
+}
+
+} // namespace
+
+TEST(Polyhedra, CubeOnASuperballMatchesBruteForce) {
+    // Random poses of a cube pressed into a superball (exponent 4): element_contact's overlap and
+    // normal (libccd GJK/EPA, overlap re-evaluated along EPA's normal) against the brute-force
+    // minimum of h_b(n) + h_a(-n) over directions.
+    const geometry::ShapeTemplate cube = shape("cube");
+    const geometry::ShapeTemplate ball = shape("superball");
+    const geometry::PolyhedronFeatures f =
+        geometry::polyhedron_features(std::get<geometry::ConvexPolyhedron>(cube.shape));
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int touching = 0;
+    for (int k = 0; k < 60; ++k) {
+        const Quat qa(Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()));
+        const Quat qb(Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()));
+        const Vec3 dir = Vec3(u(rng), u(rng), u(rng)).normalized();
+        std::vector<Element> e;
+        append_elements(&ball, nullptr, Vec3::Zero(), qb, ball.bounding_radius(), e);
+        // Cube centre along dir at a distance where the supports just overlap by ~0.05 mm.
+        const geometry::PosedSuperquadric pb{e[0].sq, Vec3::Zero(), qb};
+        geometry::PosedPolyhedron pa{&f, Vec3::Zero(), qa};
+        const double reach = dir.dot(pb.support(dir)) - dir.dot(pa.support(-dir) - pa.x);
+        pa.x = (reach - 2e-4) * dir;
+        append_elements(&cube, &f, pa.x, qa, cube.bounding_radius(), e);
+        Vec3 n_ref = Vec3::UnitX();
+        const double mtd = brute_mtd(pa, pb, n_ref);
+        for (const bool swap : {false, true}) {
+            const ElementContact c =
+                swap ? element_contact(e[0], e[1], NarrowPhase::newton, nullptr)
+                     : element_contact(e[1], e[0], NarrowPhase::newton, nullptr);
+            ASSERT_TRUE(c.converged) << k;
+            ASSERT_EQ(c.touching, mtd > 0.0) << k << " " << mtd;
+            if (!c.touching) {
+                continue;
+            }
+            const Vec3 n = swap ? Vec3(-c.normal) : c.normal;
+            // Both are upper bounds of the MTD (overlaps along a found direction); EPA's direction
+            // is good to ~1e-5 of the length scale, the brute force's to its last step: 0.2 %.
+            EXPECT_NEAR(c.overlap, mtd, 2e-3 * mtd) << k;
+            EXPECT_GT(n.dot(n_ref), 1.0 - 1e-3) << k;
+            EXPECT_GT(c.r_eff, 0.0);
+            touching += swap ? 0 : 1;
+        }
+    }
+    EXPECT_GT(touching, 30);
+}
+
+TEST(Polyhedra, CubeAndSuperballCollideKeepingMomentum) {
+    // The pair runs in the step loop: a cube and a superball in one scene collide off-centre;
+    // momentum and angular momentum are exchanged pairwise and no query fails.
     SceneSpec s = base_scene();
-    io::MeshInput m = io::read_mesh_file(
-        std::filesystem::path(KILN_SOURCE_DIR) / "shapes" / "wall_box_20mm.stl", 1e-3);
-    s.mesh_walls.push_back(
-        {"floor", std::make_shared<const geometry::MeshWall>(m.points, m.triangles, "box"), 0});
-    s.shapes.push_back(shape("ellipsoid_123"));
-    s.particles.push_back(body(0, Vec3(0, 0, 0.005)));
-    EXPECT_THROW(System{s}, InputError);
+    s.shapes.push_back(shape("cube"));
+    s.shapes.push_back(shape("superball"));
+    const double ra = s.shapes[0].bounding_radius();
+    const double rb = s.shapes[1].bounding_radius();
+    const Quat q(Eigen::AngleAxisd(0.4, Vec3(1, 2, 3).normalized()));
+    s.particles.push_back(body(0, Vec3(-ra - 1e-5, 0.2e-3, 0), Vec3(0.5, 0, 0), Vec3(0, 20, 0), q));
+    s.particles.push_back(
+        body(1, Vec3(rb + 1e-5, -0.2e-3, 0.1e-3), Vec3(-0.5, 0, 0), Vec3(5, 0, 0), q.conjugate()));
+    System sys(s);
+    const Vec3 p0 = momentum(sys);
+    const Vec3 l0 = angular_momentum(sys);
+    long contacts = 0;
+    for (int k = 0; k < 15000; ++k) {
+        sys.step();
+        contacts += sys.counters().particle_contacts;
+    }
+    EXPECT_GT(contacts, 10);
+    EXPECT_EQ(sys.narrow_phase_counters().failures, 0);
+    EXPECT_LT((momentum(sys) - p0).norm(), kMomentumRounding);
+    EXPECT_LT((angular_momentum(sys) - l0).norm(), 1e-9 * l0.norm()); // pairwise: round-off
+    // They separated after one collision (coefficient of restitution 0.5 in the material).
+    EXPECT_GT((sys.particles().x[0] - sys.particles().x[1]).norm(), ra + rb);
 }
 
 TEST(Polyhedra, SavedStateContinuesBitForBit) {
@@ -204,6 +380,87 @@ TEST(Polyhedra, SavedStateContinuesBitForBit) {
         EXPECT_EQ(a.particles().x[i], b.particles().x[i]);
         EXPECT_EQ(a.particles().q[i].coeffs(), b.particles().q[i].coeffs());
     }
+}
+
+} // namespace
+} // namespace kiln::dynamics
+
+namespace kiln::dynamics {
+namespace {
+
+TEST(Polyhedra, GjkEpaFindsTheContactsOfACommonPlaneBed) {
+    // Item of issue 4: a GJK/EPA bed of cubes had a third of the contacts of a common-plane bed
+    // (docs/performance.md). Here both narrow phases look at the same poses: a lattice of 125
+    // randomly turned cubes collapsing into a box, run with the common plane; then every pair of
+    // cubes whose bounding spheres overlap is queried by both methods.
+    SceneSpec s = base_scene();
+    s.materials[0] = {"pom", 5e7, 0.35, 1380, 0.5, 0.3, 0.0};
+    s.gravity = Vec3(0, 0, -9.81);
+    s.time_step = 5e-6;
+    s.shapes.push_back(shape("cube"));
+    InsertSpec ins;
+    ins.kind = InsertSpec::Kind::lattice;
+    ins.count = 125;
+    ins.velocity = Vec3(0, 0, -0.2);
+    ins.orientation.random = true;
+    ins.shape = 0;
+    ins.size.radius = s.shapes[0].bounding_radius();
+    const double a = 2.0 * ins.size.radius * 1.02;
+    ins.spacing = a;
+    const Vec3 hi = Vec3::Constant(5 * a + 1e-4);
+    ins.region = {Vec3::Zero(), hi};
+    for (int k = 0; k < 3; ++k) {
+        s.walls.push_back({"lo", PlaneWall{Vec3::Zero(), Vec3::Unit(k)}, 0});
+        s.walls.push_back(
+            {"hi", PlaneWall{hi + Vec3(0, 0, k == 2 ? 0.05 : 0.0), -Vec3::Unit(k)}, 0});
+    }
+    s.inserts.push_back(ins);
+    System sys(s);
+    for (int k = 0; k < 12000; ++k) { // 0.06 s: the lattice has landed and is settling
+        sys.step();
+    }
+    const ParticleStore& p = sys.particles();
+    const geometry::PolyhedronFeatures f =
+        geometry::polyhedron_features(std::get<geometry::ConvexPolyhedron>(s.shapes[0].shape));
+    std::vector<Element> e;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        append_elements(&s.shapes[0], &f, p.x[i], p.q[i], p.radius[i], e);
+    }
+    int cp = 0;
+    int epa = 0;
+    int both = 0;
+    int off = 0;
+    double worst = 0.0;
+    double lowest = 1.0;
+    for (std::size_t i = 0; i < e.size(); ++i) {
+        for (std::size_t j = i + 1; j < e.size(); ++j) {
+            const ElementContact c = element_contact(e[i], e[j], NarrowPhase::newton, nullptr);
+            const ElementContact g = element_contact(e[i], e[j], NarrowPhase::gjk_epa, nullptr);
+            ASSERT_TRUE(g.converged);
+            cp += c.touching ? 1 : 0;
+            epa += g.touching ? 1 : 0;
+            if (c.touching && g.touching) {
+                ++both;
+                const double rel = (g.overlap - c.overlap) / c.overlap;
+                worst = std::max(worst, rel);
+                lowest = std::min(lowest, rel);
+                off += rel > 1e-3 ? 1 : 0;
+            }
+        }
+    }
+    std::printf("pairs touching: common plane %d, GJK/EPA %d, both %d; EPA overlap above the "
+                "common plane's by more than 0.1 %% in %d, at most %.3g\n",
+                cp, epa, both, off, worst);
+    EXPECT_GT(cp, 100); // a bed: about two contacts per cube
+    // Detection: the same pairs touch (so the bench's third of the contacts was not detection).
+    EXPECT_EQ(both, cp);
+    EXPECT_EQ(epa, cp);
+    // The common plane is the exact MTD; EPA's overlap along its own normal is an upper bound (to
+    // round-off). In this bed it lies above by more than 0.1 % in about half the pairs, by at most
+    // 4.5 % (libccd stops EPA on a nearly, not exactly, optimal face: its normal is off by ~1e-3
+    // rad in shallow, nearly flat contacts). Bound: 30 %, the largest seen in an earlier bed.
+    EXPECT_GT(lowest, -1e-9);
+    EXPECT_LT(worst, 0.3);
 }
 
 } // namespace

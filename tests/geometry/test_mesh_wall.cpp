@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <gtest/gtest.h>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -320,3 +321,130 @@ TEST(MeshWall, SphereReboundsFromAMeshBoxAsFromAPlane) {
 }
 
 } // namespace
+
+namespace {
+
+/// Overlap of a posed superquadric with a triangle (m) along unit n (from the triangle to the
+/// body): the gap of their supporting planes, minimised over n it is the MTD.
+double triangle_overlap(const g::PosedSuperquadric& s, const g::SupportTriangle& t, const Vec3& n) {
+    return n.dot(t.support(n)) - n.dot(s.support(-n));
+}
+
+/// Brute-force MTD of a superquadric against a triangle: the smallest overlap over a Fibonacci
+/// sphere of directions in the triangle's front half space, refined by shrinking random steps.
+double brute_mtd(const g::PosedSuperquadric& s, const g::SupportTriangle& t, const Vec3& front,
+                 Vec3& best_n) {
+    double best = std::numeric_limits<double>::infinity();
+    const int n_dirs = 20000;
+    for (int k = 0; k < n_dirs; ++k) {
+        const double z = 1.0 - (2.0 * k + 1.0) / n_dirs;
+        const double phi = k * kPi * (3.0 - std::sqrt(5.0));
+        const Vec3 n(std::sqrt(1 - z * z) * std::cos(phi), std::sqrt(1 - z * z) * std::sin(phi), z);
+        if (n.dot(front) <= 0.0) {
+            continue;
+        }
+        const double d = triangle_overlap(s, t, n);
+        if (d < best) {
+            best = d;
+            best_n = n;
+        }
+    }
+    std::mt19937 rng(7);
+    std::normal_distribution<double> gauss;
+    for (double step = 0.03; step > 1e-8; step *= 0.85) {
+        for (int k = 0; k < 200; ++k) {
+            const Vec3 n = (best_n + step * Vec3(gauss(rng), gauss(rng), gauss(rng))).normalized();
+            const double d = triangle_overlap(s, t, n);
+            if (n.dot(front) > 0.0 && d < best) {
+                best = d;
+                best_n = n;
+            }
+        }
+    }
+    return best;
+}
+
+} // namespace
+
+TEST(MeshWall, SuperquadricSlidesAcrossSharedEdgesAsOnAPlane) {
+    // A tilted superball and a tilted ellipsoid pressed delta into a flat mesh move along paths
+    // crossing edges, a shared diagonal and shared vertices: one contact, normal +z, depth delta
+    // (the analytic plane's contact) everywhere.
+    const double s = 1e-3;
+    const g::MeshWall w = flat_grid(8, s);
+    const g::ShapeTemplate ball = kiln::io::read_shape_file(
+        kiln::io::find_shape_file("superball", kiln::io::default_shape_dirs()));
+    const g::ShapeTemplate ell = kiln::io::read_shape_file(
+        kiln::io::find_shape_file("ellipsoid_123", kiln::io::default_shape_dirs()));
+    const double delta = 1e-5;
+    const Vec3 paths[][2] = {{Vec3(3.3, 3.2, 0) * s, Vec3(4.7, 5.1, 0) * s},
+                             {Vec3(3.0, 3.0, 0) * s, Vec3(5.0, 5.0, 0) * s},
+                             {Vec3(3.0, 4.0, 0) * s, Vec3(5.5, 4.0, 0) * s}};
+    const Quat q(Eigen::AngleAxisd(0.5, Vec3(1, 2, 0.5).normalized()));
+    std::vector<g::MeshContact> out;
+    for (const g::ShapeTemplate* t : {&ball, &ell}) {
+        const auto& sq = std::get<g::Superquadric>(t->shape);
+        double worst = 0.0;
+        int most = 0;
+        int fewest = 10;
+        for (const auto& p : paths) {
+            for (int k = 0; k <= 400; ++k) {
+                g::PosedSuperquadric b{&sq, p[0] + (p[1] - p[0]) * (k / 400.0), q};
+                b.x.z() += -b.support(-Vec3::UnitZ()).z() - delta; // lowest point at -delta
+                EXPECT_EQ(w.superquadric_contacts(b, t->bounding_radius(), out), 0);
+                Vec3 f = Vec3::Zero();
+                for (const auto& m : out) {
+                    f += m.depth * m.normal;
+                }
+                worst = std::max(worst, (f - delta * Vec3::UnitZ()).norm() / delta);
+                most = std::max(most, static_cast<int>(out.size()));
+                fewest = std::min(fewest, static_cast<int>(out.size()));
+            }
+        }
+        EXPECT_LT(worst, 1e-6) << t->name; // the support point's depth, to round-off of mm sums
+        EXPECT_EQ(most, 1) << t->name;
+        EXPECT_EQ(fewest, 1) << t->name;
+    }
+}
+
+TEST(MeshWall, SuperquadricOverAMeshRimMatchesBruteForce) {
+    // A superball whose lowest point lies beyond the rim of a one-triangle wall still overlaps the
+    // triangle across its edge: one edge contact whose overlap and normal are the triangle's MTD
+    // (brute force over directions).
+    const double s = 4e-3;
+    const g::MeshWall w({Vec3(0, 0, 0), Vec3(s, 0, 0), Vec3(0, s, 0)}, {{0, 1, 2}}, "triangle");
+    const g::ShapeTemplate ball = kiln::io::read_shape_file(
+        kiln::io::find_shape_file("superball", kiln::io::default_shape_dirs()));
+    const auto& sq = std::get<g::Superquadric>(ball.shape);
+    const g::SupportTriangle tri{{Vec3(0, 0, 0), Vec3(s, 0, 0), Vec3(0, s, 0)},
+                                 Vec3(s, s, 0) / 3.0};
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::vector<g::MeshContact> out;
+    int checked = 0;
+    int apart = 0;
+    for (int k = 0; k < 30; ++k) {
+        const Quat q =
+            Quat(Eigen::AngleAxisd(kPi * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()));
+        // Lowest point 0.1 mm below the plane and 0.02 to 0.5 mm beyond the hypotenuse.
+        g::PosedSuperquadric b{&sq, Vec3::Zero(), q};
+        const Vec3 out_dir = Vec3(1, 1, 0).normalized();
+        const Vec3 target = Vec3(0.5 * s, 0.5 * s, -1e-4) + (0.26e-3 + 0.24e-3 * u(rng)) * out_dir +
+                            0.5e-3 * u(rng) * Vec3(1, -1, 0).normalized();
+        b.x = target - b.support(-Vec3::UnitZ());
+        Vec3 n_ref = Vec3::UnitZ();
+        const double mtd = brute_mtd(b, tri, Vec3::UnitZ(), n_ref);
+        ASSERT_EQ(w.superquadric_contacts(b, ball.bounding_radius(), out), 0);
+        if (mtd <= 0.0) {
+            ++apart;
+            EXPECT_TRUE(out.empty());
+            continue;
+        }
+        ASSERT_EQ(out.size(), 1U);
+        // EPA finds the direction to ~1e-5 of the length scale; the overlap along it is exact.
+        EXPECT_NEAR(out[0].depth, mtd, 2e-3 * mtd + 1e-8) << k;
+        EXPECT_GT(out[0].normal.dot(n_ref), 1.0 - 1e-3) << k;
+        ++checked;
+    }
+    EXPECT_GT(checked, 10) << apart;
+}

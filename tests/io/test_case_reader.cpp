@@ -295,14 +295,12 @@ TEST(CaseReader, ShapeErrorsAreLocated) {
               std::string::npos);
     EXPECT_NE(error_of(body("radius = 1e-3\norientation = \"random\"\n")).find("only used with"),
               std::string::npos);
-    // Polyhedra run, but not next to superquadrics.
+    // Polyhedra run, also next to superquadrics.
     EXPECT_EQ(error_of(body("shape = \"cube\"\n")), "");
     const std::string mixed = error_of(
         body("shape = \"cube\"\n") + "\n[[particle]]\nmaterial = \"glass\"\n"
                                      "position = [0.01, 0.01, 0.015]\nshape = \"ellipsoid_123\"\n");
-    EXPECT_NE(mixed.find("polyhedra and superquadrics in one case are not yet supported"),
-              std::string::npos)
-        << mixed;
+    EXPECT_EQ(mixed, "");
 }
 
 TEST(CaseReader, SuperquadricAspectRatioAboveTenIsRefused) {

@@ -1,5 +1,6 @@
 #include "core/error.hpp"
 #include "dynamics/system.hpp"
+#include "geometry/mesh_wall.hpp"
 #include "io/case_spec.hpp"
 #include "io/monitors.hpp"
 #include "io/shape_reader.hpp"
@@ -8,20 +9,24 @@
 
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
+#include <vtkFieldData.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
+#include <vtkStringArray.h>
 #include <vtkXMLPolyDataReader.h>
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -352,6 +357,46 @@ TEST(ParticleSeriesWriter, WallsAreOneQuadPerPlaneAndATubePerCylinder) {
         const double* x = pd->GetPoint(k);
         EXPECT_NEAR(std::hypot(x[0] - 0.005, x[1] - 0.005), 0.02, rounding);
     }
+}
+
+TEST(ParticleSeriesWriter, MeshWallsAreWrittenAsTheirTriangles) {
+    // A mesh wall (two triangles of a square, 5 mm above the floor) after the six box planes:
+    // its triangles with their own corner points, wall index 6, and its name last.
+    const TempDir dir;
+    SceneSpec s = box_scene();
+    const std::vector<Vec3> v{
+        {0, 0, 0.005}, {0.01, 0, 0.005}, {0.01, 0.01, 0.005}, {0, 0.01, 0.005}};
+    s.mesh_walls.push_back({"ramp",
+                            std::make_shared<const geometry::MeshWall>(
+                                v, std::vector<std::array<int, 3>>{{0, 1, 2}, {0, 2, 3}}, "ramp"),
+                            0});
+    const ParticleSeriesWriter w(dir.path());
+    w.write_walls(s, dir.path() / "walls.vtp");
+
+    vtkNew<vtkXMLPolyDataReader> reader;
+    reader->SetFileName((dir.path() / "walls.vtp").string().c_str());
+    reader->Update();
+    vtkPolyData* pd = reader->GetOutput();
+    ASSERT_EQ(pd->GetNumberOfPolys(), 6 + 2);
+    vtkDataArray* wall = pd->GetCellData()->GetArray("wall");
+    ASSERT_NE(wall, nullptr);
+    EXPECT_EQ(wall->GetComponent(6, 0), 6.0);
+    EXPECT_EQ(wall->GetComponent(7, 0), 6.0);
+    // The last two cells are the triangles, on the mesh's own points (exact copies).
+    vtkIdType n = 0;
+    const vtkIdType* ids = nullptr;
+    pd->GetCellPoints(7, n, ids);
+    ASSERT_EQ(n, 3);
+    for (vtkIdType k = 0; k < 3; ++k) {
+        const double* x = pd->GetPoint(ids[k]);
+        const Vec3& ref =
+            v[static_cast<std::size_t>(std::array<int, 3>{0, 2, 3}[static_cast<std::size_t>(k)])];
+        EXPECT_EQ(Vec3(x[0], x[1], x[2]), ref);
+    }
+    auto* names = vtkStringArray::SafeDownCast(pd->GetFieldData()->GetAbstractArray("wall_name"));
+    ASSERT_NE(names, nullptr);
+    ASSERT_EQ(names->GetNumberOfValues(), 7);
+    EXPECT_EQ(names->GetValue(6), "ramp");
 }
 
 TEST(Monitors, KineticEnergyIsHalfMassSpeedSquared) {
