@@ -42,19 +42,27 @@ const geometry::ShapeTemplate* shape_of(const dynamics::System& sys, std::size_t
     return s >= 0 ? &sys.spec().shapes[static_cast<std::size_t>(s)] : nullptr;
 }
 
-/// The heat module's version of a body's shape (body frame); throws a located InputError for
-/// shapes without a heat grid yet (clumps, polyhedra).
-heat::Shape heat_shape(const geometry::ShapeTemplate& t, const std::string& material) {
+/// The heat module's version of a body's shape (body frame, centre of mass at the origin, as the
+/// template). A clump carries the template's union volume and exposed area as its references.
+heat::Shape heat_shape(const geometry::ShapeTemplate& t) {
     if (const auto* sq = std::get_if<geometry::Superquadric>(&t.shape)) {
         return heat::Superquadric{sq->half_axes, sq->e1, sq->e2};
     }
     if (const auto* sp = std::get_if<geometry::Sphere>(&t.shape)) {
         return heat::Sphere{sp->radius};
     }
-    throw InputError(fmt::format(
-        "heat: material \"{}\" is resolved but shape template \"{}\" is a {}: resolved heat for "
-        "clump/polyhedron templates: not yet (use model = \"lumped\" for this material)",
-        material, t.name, geometry::kind_name(t.shape)));
+    if (const auto* c = std::get_if<geometry::Clump>(&t.shape)) {
+        heat::Clump h;
+        for (const geometry::ClumpSphere& m : c->spheres) {
+            h.centres.push_back(m.centre);
+            h.radii.push_back(m.radius);
+        }
+        h.volume = c->volume;
+        h.area = geometry::surface_area(t.shape).value;
+        return h;
+    }
+    const auto& p = std::get<geometry::ConvexPolyhedron>(t.shape);
+    return heat::make_convex_polyhedron(p.vertices, p.faces);
 }
 
 /// Effective modulus of two bodies, 1 / ((1 - nu1^2) / E1 + (1 - nu2^2) / E2) (Pa).
@@ -108,16 +116,24 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
     }
     spec_.flow_direction = spec_.flow_direction.normalized();
     spec_.wall_temperature.resize(sys.spec().walls.size(), unset);
-    for (std::size_t w = 0; w < spec_.wall_temperature.size(); ++w) {
-        if (!std::isnan(spec_.wall_temperature[w])) {
-            const auto m = static_cast<std::size_t>(sys.spec().walls[w].material);
-            if (!spec_.materials[m].enabled) {
-                throw InputError(fmt::format(
-                    "heat: wall \"{}\" has a temperature but its material \"{}\" has no heat "
-                    "properties (give the material a heat table with a conductivity)",
-                    sys.spec().walls[w].name, mats[m].name));
-            }
+    spec_.mesh_wall_temperature.resize(sys.spec().mesh_walls.size(), unset);
+    // Walls (analytic, then mesh) at a temperature conduct through their material.
+    const auto check_wall = [&](double t, int material, const std::string& name) {
+        const auto m = static_cast<std::size_t>(material);
+        if (!std::isnan(t) && !spec_.materials[m].enabled) {
+            throw InputError(fmt::format(
+                "heat: wall \"{}\" has a temperature but its material \"{}\" has no heat "
+                "properties (give the material a heat table with a conductivity)",
+                name, mats[m].name));
         }
+    };
+    for (std::size_t w = 0; w < spec_.wall_temperature.size(); ++w) {
+        check_wall(spec_.wall_temperature[w], sys.spec().walls[w].material,
+                   sys.spec().walls[w].name);
+    }
+    for (std::size_t w = 0; w < spec_.mesh_wall_temperature.size(); ++w) {
+        check_wall(spec_.mesh_wall_temperature[w], sys.spec().mesh_walls[w].material,
+                   sys.spec().mesh_walls[w].name);
     }
     // Surface area of every shape template (lumped bodies, Biot numbers).
     for (const geometry::ShapeTemplate& t : sys.spec().shapes) {
@@ -148,9 +164,9 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
         }
         c.used = heat::choose_model(mh.model, c.biot, spec_.biot_threshold);
     }
-    // Resolved bodies need a heat grid of their shape and a template matrix that does not depend
-    // on the orientation: refuse clumps and polyhedra, and the stagnation f(theta), before the
-    // run, for the particles placed by hand and those inserted later.
+    // Resolved bodies need a heat grid of their shape (checked here) and a template matrix that
+    // does not depend on the orientation: refuse the stagnation f(theta) before the run, for the
+    // particles placed by hand and those inserted later.
     std::vector<std::tuple<int, int, std::string>> kinds; // (material, shape, where)
     for (std::size_t k = 0; k < sys.spec().particles.size(); ++k) {
         const auto& ps = sys.spec().particles[k];
@@ -166,9 +182,11 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
             continue;
         }
         try {
-            (void)heat_shape(sys.spec().shapes[static_cast<std::size_t>(shape)], mats[m].name);
+            heat::validate(heat_shape(sys.spec().shapes[static_cast<std::size_t>(shape)]));
         } catch (const InputError& e) {
-            throw InputError(fmt::format("{} ({})", e.what(), where));
+            throw InputError(fmt::format(
+                "{} (resolved material \"{}\", shape template \"{}\", {})", e.what(), mats[m].name,
+                sys.spec().shapes[static_cast<std::size_t>(shape)].name, where));
         }
         if (spec_.stagnation && spec_.heat_transfer_coefficient > 0.0) {
             throw InputError(fmt::format(
@@ -238,8 +256,7 @@ int ThermalSystem::template_for(const dynamics::System& sys, std::size_t i) {
         heat::CartesianResolution cr;
         cr.cells_across = mh.cells_across;
         const heat::Shape shape =
-            body != nullptr ? heat_shape(*body, material_names_[static_cast<std::size_t>(material)])
-                            : heat::Shape{heat::Sphere{radius}};
+            body != nullptr ? heat_shape(*body) : heat::Shape{heat::Sphere{radius}};
         t->grid = std::make_shared<const heat::ThermalGrid>(heat::make_cartesian_grid(shape, cr));
     }
     // Spheres have no orientation: body frame = world axes, so the stagnation direction is the
@@ -416,14 +433,16 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
         int mat_j = 0;
         double rj = 0.0;
         if (rec.wall) {
-            if (rec.j >= spec_.wall_temperature.size()) {
-                continue; // a mesh wall (indices after the analytic walls): adiabatic for now
-            }
-            d.wall_temperature = spec_.wall_temperature[rec.j];
+            // Analytic walls first, then the mesh walls (the contact keys' order).
+            const std::size_t n_walls = spec_.wall_temperature.size();
+            const bool mesh = rec.j >= n_walls;
+            d.wall_temperature =
+                mesh ? spec_.mesh_wall_temperature[rec.j - n_walls] : spec_.wall_temperature[rec.j];
             if (std::isnan(d.wall_temperature)) {
                 continue;
             }
-            mat_j = sys.spec().walls[rec.j].material;
+            mat_j = mesh ? sys.spec().mesh_walls[rec.j - n_walls].material
+                         : sys.spec().walls[rec.j].material;
         } else {
             d.b = by_id_[static_cast<std::size_t>(p.id[rec.j])];
             if (d.b.slot < 0) {
