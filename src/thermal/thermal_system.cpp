@@ -122,7 +122,9 @@ struct ThermalSystem::Template {
     std::map<std::pair<int, int>, std::unique_ptr<heat::ResolvedOperator>> ops;
     std::vector<double> capacity; // per cell (J/K)
     double total_capacity = 0;
-    double full_cell_capacity = 0; // capacity of a full Cartesian cell, rho c_p h^3 (J/K)
+    double full_cell_capacity = 0;   // capacity of a full Cartesian cell, rho c_p h^3 (J/K)
+    bool turning_stagnation = false; // a body under f(theta): uniform h in the matrix, the rest
+                                     // lagged per body and thermal step
 };
 
 /// One conducting contact of the current thermal step, with its patches in each body.
@@ -201,9 +203,8 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
         }
         c.used = heat::choose_model(mh.model, c.biot, spec_.biot_threshold);
     }
-    // Resolved bodies need a heat grid of their shape (checked here) and a template matrix that
-    // does not depend on the orientation: refuse the stagnation f(theta) before the run, for the
-    // particles placed by hand and those inserted later.
+    // Resolved bodies need a heat grid of their shape: checked here for the particles placed by
+    // hand and those inserted later.
     std::vector<std::tuple<int, int, std::string>> kinds; // (material, shape, where)
     for (std::size_t k = 0; k < sys.spec().particles.size(); ++k) {
         const auto& ps = sys.spec().particles[k];
@@ -224,13 +225,6 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
             throw InputError(fmt::format(
                 "{} (resolved material \"{}\", shape template \"{}\", {})", e.what(), mats[m].name,
                 sys.spec().shapes[static_cast<std::size_t>(shape)].name, where));
-        }
-        if (spec_.stagnation && spec_.heat_transfer_coefficient > 0.0) {
-            throw InputError(fmt::format(
-                "heat: stagnation = true with resolved bodies (material \"{}\", {}): f(theta) "
-                "is built into a template's matrix and a body turns; not yet (use "
-                "stagnation = false or the lumped model)",
-                mats[m].name, where));
         }
     }
     sync(sys);
@@ -297,9 +291,13 @@ int ThermalSystem::template_for(const dynamics::System& sys, std::size_t i) {
         t->grid = std::make_shared<const heat::ThermalGrid>(heat::make_cartesian_grid(shape, cr));
     }
     // Spheres have no orientation: body frame = world axes, so the stagnation direction is the
-    // same in every sphere and the local h goes into the template matrix exactly (resolved bodies
-    // with stagnation are refused in the constructor).
-    if (spec_.heat_transfer_coefficient > 0.0 && spec_.stagnation) {
+    // same in every sphere and the local h goes into the template matrix exactly. Bodies turn:
+    // their matrix keeps the uniform mean h, and h f(theta) of the body's current orientation
+    // enters as the lagged correction of convection.hpp (thermal_step).
+    if (spec_.heat_transfer_coefficient > 0.0 && spec_.stagnation && body != nullptr) {
+        t->h_face = {spec_.heat_transfer_coefficient};
+        t->turning_stagnation = true;
+    } else if (spec_.heat_transfer_coefficient > 0.0 && spec_.stagnation) {
         t->h_face = heat::stagnation_distribution(*t->grid, -spec_.flow_direction,
                                                   spec_.heat_transfer_coefficient);
     } else if (spec_.heat_transfer_coefficient > 0.0) {
@@ -380,6 +378,8 @@ void ThermalSystem::sync(const dynamics::System& sys) {
             pool_template_.push_back(r.templ);
             face_offset_.push_back(face_rate_.size());
             face_rate_.resize(face_rate_.size() + g.boundary.size(), 0.0);
+            stag_h_.resize(face_rate_.size(), 0.0);
+            conv_rate_.resize(face_rate_.size(), 0.0);
         }
         by_id_[static_cast<std::size_t>(id)] = r;
         slot_ids_.push_back(id);
@@ -552,6 +552,28 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
             worst = std::max(worst, g_sum[i] / capacity_of(r));
         }
     }
+    // Bodies under f(theta): h per face for the current orientation (flow direction turned into
+    // the body frame with q^-1); the lagged part (G_b(h f) - G_b(h)) / C_cell joins the lag limit.
+    std::vector<char> stagnant(static_cast<std::size_t>(pool_.size()), 0);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        const Record& r = by_id_[static_cast<std::size_t>(p.id[i])];
+        if (r.templ < 0 || !templates_[static_cast<std::size_t>(r.templ)]->turning_stagnation) {
+            continue;
+        }
+        const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
+        const std::vector<double> hf = heat::stagnation_distribution(
+            *t.grid, p.q[i].conjugate() * (-spec_.flow_direction), spec_.heat_transfer_coefficient);
+        const std::size_t off = face_offset_[static_cast<std::size_t>(r.slot)];
+        for (std::size_t b = 0; b < hf.size(); ++b) {
+            stag_h_[off + b] = hf[b];
+            const heat::BoundaryFace& f = t.grid->boundary[b];
+            const double dg =
+                heat::surface_conductance(f, hf[b], t.props.conductivity) -
+                heat::surface_conductance(f, spec_.heat_transfer_coefficient, t.props.conductivity);
+            worst = std::max(worst, std::abs(dg) / t.capacity[static_cast<std::size_t>(f.cell)]);
+        }
+        stagnant[static_cast<std::size_t>(r.slot)] = 1;
+    }
     // Lag limit: sub-steps (a power of two, so few operators are built) keep
     // dt_sub * worst <= lag_safety.
     const double ratio = dt_ * worst;
@@ -628,6 +650,27 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
                 dt_sub * (h * a * (spec_.ambient_temperature - t_new) + spec_.flux * a);
             lumped_[k] = t_new;
         }
+        // Bodies under f(theta): the lagged convection correction from the field at the start of
+        // the sub-step, added to the contact rates (and booked as external heat below).
+        const double t_inf = spec_.ambient_temperature;
+        const double h_mean = spec_.heat_transfer_coefficient;
+        for (int slot = 0; slot < pool_.size(); ++slot) {
+            if (stagnant[static_cast<std::size_t>(slot)] == 0) {
+                continue;
+            }
+            const Template& t = *templates_[static_cast<std::size_t>(
+                pool_template_[static_cast<std::size_t>(slot)])];
+            const std::size_t off = face_offset_[static_cast<std::size_t>(slot)];
+            const std::size_t nb = t.grid->boundary.size();
+            const std::span<double> conv(conv_rate_.data() + off, nb);
+            heat::lagged_convection(*t.grid, t.props.conductivity,
+                                    std::span<const double>(stag_h_.data() + off, nb),
+                                    std::span<const double>(&h_mean, 1),
+                                    std::span<const double>(&t_inf, 1), pool_.field(slot), conv);
+            for (std::size_t b = 0; b < nb; ++b) {
+                face_rate_[off + b] += conv[b];
+            }
+        }
         // Resolved particles: one backward-Euler solve each with the lagged heat rates. The solves
         // are independent: threads take slots, each with its own operator (built here, outside
         // the parallel loop); the sums below run in slot order, so results do not depend on the
@@ -662,9 +705,12 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
             const Template& t = *templates_[static_cast<std::size_t>(
                 pool_template_[static_cast<std::size_t>(slot)])];
             const double* rates = face_rate_.data() + face_offset_[static_cast<std::size_t>(slot)];
-            double contact_in = 0.0;
+            double contact_in = 0.0; // lagged contact rates: internal, not external heat
+            const bool conv = stagnant[static_cast<std::size_t>(slot)] != 0;
+            const double* conv_rates =
+                conv_rate_.data() + face_offset_[static_cast<std::size_t>(slot)];
             for (std::size_t b = 0; b < t.grid->boundary.size(); ++b) {
-                contact_in += rates[b];
+                contact_in += rates[b] - (conv ? conv_rates[b] : 0.0);
             }
             external_heat_ += rep.heat_in - dt_sub * contact_in;
             ++counters_.solves;
