@@ -214,11 +214,14 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
         const auto& ins = sys.spec().inserts[k];
         kinds.emplace_back(ins.material, ins.shape, fmt::format("insert block {}", k));
     }
+    std::vector<char> checked(sys.spec().shapes.size(), 0); // each template once
     for (const auto& [material, shape, where] : kinds) {
         const auto m = static_cast<std::size_t>(material);
-        if (shape < 0 || choice_[m].used != heat::HeatModel::resolved) {
+        if (shape < 0 || choice_[m].used != heat::HeatModel::resolved ||
+            checked[static_cast<std::size_t>(shape)] != 0) {
             continue;
         }
+        checked[static_cast<std::size_t>(shape)] = 1;
         try {
             heat::validate(heat_shape(sys.spec().shapes[static_cast<std::size_t>(shape)]));
         } catch (const InputError& e) {
