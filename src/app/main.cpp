@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
         }
         const kiln::io::CaseSpec spec = kiln::io::read_case_file(case_file);
         if (check->parsed()) {
+            kiln::app::check_setup(spec); // the start-up refusals of `kiln run` too
             fmt::print("{}", spec.resolved_toml);
             return 0;
         }

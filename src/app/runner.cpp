@@ -53,16 +53,10 @@ long every(double interval, double dt) {
     return std::max(1L, std::lround(interval / dt));
 }
 
-} // namespace
-
-int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
-    io::make_directory(opt.out_dir);
-    io::write_text_file(
-        opt.out_dir / "case.resolved.toml",
-        fmt::format("# kiln {} (git {}), resolved from {}\n# every default filled in; "
-                    "runs as it stands with `kiln run`\n\n{}",
-                    kiln::version, kiln::git_hash, spec.source_file, spec.resolved_toml));
-
+/// The mechanical system of a case and, with [heat], its thermal system; their set-up errors
+/// are prefixed by the case file.
+std::pair<std::unique_ptr<dynamics::System>, std::unique_ptr<thermal::ThermalSystem>>
+build_systems(const io::CaseSpec& spec) {
     std::unique_ptr<dynamics::System> sys;
     try {
         sys = std::make_unique<dynamics::System>(spec.scene);
@@ -78,6 +72,26 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
             throw InputError(spec.source_file + ": " + e.what());
         }
     }
+    return {std::move(sys), std::move(heat)};
+}
+
+} // namespace
+
+void check_setup(const io::CaseSpec& spec) {
+    (void)build_systems(spec);
+}
+
+int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
+    io::make_directory(opt.out_dir);
+    io::write_text_file(
+        opt.out_dir / "case.resolved.toml",
+        fmt::format("# kiln {} (git {}), resolved from {}\n# every default filled in; "
+                    "runs as it stands with `kiln run`\n\n{}",
+                    kiln::version, kiln::git_hash, spec.source_file, spec.resolved_toml));
+
+    auto systems = build_systems(spec);
+    std::unique_ptr<dynamics::System>& sys = systems.first;
+    std::unique_ptr<thermal::ThermalSystem>& heat = systems.second; // null without [heat]
     if (!opt.restart.empty()) {
         sys->restore_state(io::read_checkpoint(opt.restart));
         if (heat) {

@@ -19,4 +19,9 @@ struct RunOptions {
 /// stops the run after the current step, writes a checkpoint and returns 130.
 int run_case(const io::CaseSpec& spec, const RunOptions& opt);
 
+/// Builds the case's mechanical system and, with [heat], its thermal system without running a
+/// step, so `kiln check` refuses what `kiln run` refuses at start-up (e.g. heat set-ups not
+/// supported yet). Throws InputError prefixed by the case file.
+void check_setup(const io::CaseSpec& spec);
+
 } // namespace kiln::app

@@ -732,8 +732,8 @@ void System::collect_contacts(std::vector<ContactRecord>& out) const {
             out.push_back(c);
         }
     }
-    if (!has_bodies_) {
-        return;
+    if (!generic_contacts()) {
+        return; // no bodies and no mesh walls: nothing in body_contacts_
     }
     // Contacts with mesh walls carry the wall index walls.size() + mesh index (the key order of
     // body contacts), so `j` of such a record is not an index into spec_.walls.

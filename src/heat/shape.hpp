@@ -31,9 +31,34 @@ struct Superquadric {
     double e2 = 1.0;          ///< east-west (x-y) shape exponent (-)
 };
 
+/// Convex polyhedron, the intersection of the half-spaces of its faces. Build it with
+/// make_convex_polyhedron (which derives the planes); body frame.
+struct ConvexPolyhedron {
+    std::vector<Vec3> vertices;            ///< vertex positions (m), body frame
+    std::vector<std::array<int, 3>> faces; ///< outward (counter-clockwise) triangles
+    std::vector<Vec3> normals;             ///< unit outward normals of the distinct face planes
+    std::vector<double> offsets;           ///< plane offsets (m): inside where n . x <= offset
+};
+
+/// Rigid union of spheres (a clump), body frame. `volume` and `area` are the union's reference
+/// values supplied by the caller (a geometry template: column quadrature and exposed-area
+/// integration); 0 when unknown, then exact_volume / reference_area refuse.
+struct Clump {
+    std::vector<Vec3> centres; ///< member centres (m), body frame
+    std::vector<double> radii; ///< member radii (m)
+    double volume = 0.0;       ///< reference volume of the union (m^3), 0 = unknown
+    double area = 0.0;         ///< reference surface area of the union (m^2), 0 = unknown
+};
+
 /// Every shape the heat module can grid. Adding a shape = adding an alternative plus the queries
 /// in shape.cpp.
-using Shape = std::variant<Sphere, Box, Superquadric>;
+using Shape = std::variant<Sphere, Box, Superquadric, ConvexPolyhedron, Clump>;
+
+/// Polyhedron from a closed, outward-oriented triangle mesh of a convex body (body frame, m):
+/// one plane per distinct face plane (coplanar triangles share one). Throws InputError for fewer
+/// than 4 triangles, a degenerate triangle or a vertex outside a face plane (not convex).
+[[nodiscard]] ConvexPolyhedron make_convex_polyhedron(std::vector<Vec3> vertices,
+                                                      std::vector<std::array<int, 3>> faces);
 
 /// Closed triangulated surface, outward-oriented (counter-clockwise seen from outside), body frame.
 struct SurfaceMesh {
@@ -50,7 +75,9 @@ struct SurfaceMesh {
 void validate(const Shape& shape);
 
 /// Signed distance estimate (m): negative inside, zero on the surface, exact for sphere and box,
-/// F / |grad F| (first order in the distance) for the superquadric. `x` in the body frame (m).
+/// F / |grad F| (first order in the distance) for the superquadric; polyhedron: the largest
+/// plane distance (exact inside, a lower bound of the distance outside); clump: the smallest
+/// member distance (exact outside, inside a lower bound of the depth). `x` in the body frame (m).
 [[nodiscard]] double level(const Shape& shape, const Vec3& x);
 
 /// True when `x` (body frame, m) lies inside or on the surface.
@@ -60,17 +87,22 @@ void validate(const Shape& shape);
 [[nodiscard]] Vec3 half_extent(const Shape& shape);
 
 /// Exact volume (m^3); superquadric: 2 a b c e1 e2 B(e1/2 + 1, e1) B(e2/2, e2/2) (Jaklic,
-/// Leonardis & Solina 2000, ch. 2, volume of a superellipsoid via the beta function B).
+/// Leonardis & Solina 2000, ch. 2, volume of a superellipsoid via the beta function B);
+/// polyhedron: divergence theorem over its faces; clump: the supplied reference volume.
 [[nodiscard]] double exact_volume(const Shape& shape);
 
-/// Exact surface area (m^2) of sphere and box; for the superquadric (no closed form) the
-/// Richardson extrapolation of two fine triangulations (edges 1/50 and 1/100 of the smallest
-/// semi-axis; the triangulation error is second order in the edge length).
+/// Exact surface area (m^2) of sphere, box and polyhedron; for the superquadric (no closed form)
+/// the Richardson extrapolation of two fine triangulations (edges 1/50 and 1/100 of the smallest
+/// semi-axis; the triangulation error is second order in the edge length); clump: the supplied
+/// reference area.
 [[nodiscard]] double reference_area(const Shape& shape);
 
 /// Closed surface triangulation with edges no longer than about `edge` (m). Sphere and
 /// superquadric: a cube's faces split into quads and projected radially onto the surface (both are
-/// star-shaped about the origin); box: its own faces.
+/// star-shaped about the origin); box: its own faces; polyhedron: each face triangle split into
+/// n x n similar triangles; clump: every member's sphere mesh, each triangle clipped against the
+/// radical planes of the members overlapping it (on a member sphere, "inside member j" is exactly
+/// one side of that plane), so only the union's outer surface remains, seams included.
 [[nodiscard]] SurfaceMesh surface_mesh(const Shape& shape, double edge);
 
 } // namespace kiln::heat

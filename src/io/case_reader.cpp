@@ -475,6 +475,23 @@ void read_wall_temperature(Section& s, CaseSpec& c, std::size_t first) {
     }
 }
 
+/// The optional `temperature` of a mesh wall table (K), for the mesh wall just read.
+void read_mesh_wall_temperature(Section& s, CaseSpec& c) {
+    c.heat.mesh_wall_temperature.resize(c.scene.mesh_walls.size(), thermal::unset);
+    if (!s.has("temperature")) {
+        return;
+    }
+    const double t = s.real("temperature", std::nullopt, positive(), "K");
+    const auto m = static_cast<std::size_t>(c.scene.mesh_walls.back().material);
+    if (!c.heat.materials.at(m).enabled) {
+        s.fail_at("temperature",
+                  fmt::format("the wall's material \"{}\" has no heat table; a wall at a "
+                              "temperature conducts through its material's conductivity",
+                              c.scene.materials[m].name));
+    }
+    c.heat.mesh_wall_temperature.back() = t;
+}
+
 /// Where a mesh wall was declared, for the side check once the particles are known.
 struct MeshWallSite {
     long line = 0;    ///< line of its `file` key
@@ -585,10 +602,7 @@ void read_walls(Section& root, CaseSpec& c, const std::map<std::string, int>& ma
             c.scene.walls.push_back({name, w, mat});
         }
         if (type == "mesh") {
-            if (s.has("temperature")) {
-                s.fail_at("temperature", "mesh walls are adiabatic for now; a prescribed "
-                                         "temperature is allowed on plane, box and cylinder walls");
-            }
+            read_mesh_wall_temperature(s, c);
         } else {
             read_wall_temperature(s, c, first_wall);
         }
@@ -741,6 +755,7 @@ void read_heat(Section& root, CaseSpec& c, const toml::table& doc) {
     const toml::table* t = root.table("heat");
     thermal::HeatSpec& h = c.heat;
     h.wall_temperature.resize(c.scene.walls.size(), thermal::unset);
+    h.mesh_wall_temperature.resize(c.scene.mesh_walls.size(), thermal::unset);
     if (t == nullptr) {
         // Heat data without a [heat] section is a mistake, not something to ignore silently.
         const auto refuse = [&](const char* array, const char* key, const char* what) {

@@ -61,6 +61,9 @@ struct HeatSpec {
     std::vector<MaterialHeat> materials; ///< one per material of the scene, same order
     /// Temperature of each wall of the scene (K); NaN = adiabatic (no contact conduction).
     std::vector<double> wall_temperature;
+    /// Temperature of each mesh wall of the scene (K), same order as the scene's mesh walls;
+    /// NaN = adiabatic.
+    std::vector<double> mesh_wall_temperature;
     /// Initial temperature of each explicitly placed particle (K); NaN = its material's value.
     std::vector<double> particle_temperature;
     bool field_output = false;         ///< write intra-particle fields with the VTK frames

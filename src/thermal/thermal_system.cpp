@@ -1,5 +1,7 @@
 #include "thermal/thermal_system.hpp"
 
+#include "thermal/body_shapes.hpp"
+
 #include "core/error.hpp"
 #include "geometry/shape_metrics.hpp"
 #include "heat/cartesian_grid.hpp"
@@ -44,21 +46,6 @@ const geometry::ShapeTemplate* shape_of(const dynamics::System& sys, std::size_t
     return s >= 0 ? &sys.spec().shapes[static_cast<std::size_t>(s)] : nullptr;
 }
 
-/// The heat module's version of a body's shape (body frame); throws a located InputError for
-/// shapes without a heat grid yet (clumps, polyhedra).
-heat::Shape heat_shape(const geometry::ShapeTemplate& t, const std::string& material) {
-    if (const auto* sq = std::get_if<geometry::Superquadric>(&t.shape)) {
-        return heat::Superquadric{sq->half_axes, sq->e1, sq->e2};
-    }
-    if (const auto* sp = std::get_if<geometry::Sphere>(&t.shape)) {
-        return heat::Sphere{sp->radius};
-    }
-    throw InputError(fmt::format(
-        "heat: material \"{}\" is resolved but shape template \"{}\" is a {}: resolved heat for "
-        "clump/polyhedron templates: not yet (use model = \"lumped\" for this material)",
-        material, t.name, geometry::kind_name(t.shape)));
-}
-
 /// Effective modulus of two bodies, 1 / ((1 - nu1^2) / E1 + (1 - nu2^2) / E2) (Pa).
 double effective_modulus(double e1, double nu1, double e2, double nu2) {
     return 1.0 / ((1.0 - nu1 * nu1) / e1 + (1.0 - nu2 * nu2) / e2);
@@ -80,6 +67,9 @@ struct ThermalSystem::Template {
     std::map<std::pair<int, int>, std::unique_ptr<heat::ResolvedOperator>> ops;
     std::vector<double> capacity; // per cell (J/K)
     double total_capacity = 0;
+    double full_cell_capacity = 0;   // capacity of a full Cartesian cell, rho c_p h^3 (J/K)
+    bool turning_stagnation = false; // a body under f(theta): uniform h in the matrix, the rest
+                                     // lagged per body and thermal step
 };
 
 /// One conducting contact of the current thermal step, with its patches in each body.
@@ -111,16 +101,24 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
     }
     spec_.flow_direction = spec_.flow_direction.normalized();
     spec_.wall_temperature.resize(sys.spec().walls.size(), unset);
-    for (std::size_t w = 0; w < spec_.wall_temperature.size(); ++w) {
-        if (!std::isnan(spec_.wall_temperature[w])) {
-            const auto m = static_cast<std::size_t>(sys.spec().walls[w].material);
-            if (!spec_.materials[m].enabled) {
-                throw InputError(fmt::format(
-                    "heat: wall \"{}\" has a temperature but its material \"{}\" has no heat "
-                    "properties (give the material a heat table with a conductivity)",
-                    sys.spec().walls[w].name, mats[m].name));
-            }
+    spec_.mesh_wall_temperature.resize(sys.spec().mesh_walls.size(), unset);
+    // Walls (analytic, then mesh) at a temperature conduct through their material.
+    const auto check_wall = [&](double t, int material, const std::string& name) {
+        const auto m = static_cast<std::size_t>(material);
+        if (!std::isnan(t) && !spec_.materials[m].enabled) {
+            throw InputError(fmt::format(
+                "heat: wall \"{}\" has a temperature but its material \"{}\" has no heat "
+                "properties (give the material a heat table with a conductivity)",
+                name, mats[m].name));
         }
+    };
+    for (std::size_t w = 0; w < spec_.wall_temperature.size(); ++w) {
+        check_wall(spec_.wall_temperature[w], sys.spec().walls[w].material,
+                   sys.spec().walls[w].name);
+    }
+    for (std::size_t w = 0; w < spec_.mesh_wall_temperature.size(); ++w) {
+        check_wall(spec_.mesh_wall_temperature[w], sys.spec().mesh_walls[w].material,
+                   sys.spec().mesh_walls[w].name);
     }
     // Surface area of every shape template (lumped bodies, Biot numbers).
     for (const geometry::ShapeTemplate& t : sys.spec().shapes) {
@@ -151,9 +149,8 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
         }
         c.used = heat::choose_model(mh.model, c.biot, spec_.biot_threshold);
     }
-    // Resolved bodies need a heat grid of their shape and a template matrix that does not depend
-    // on the orientation: refuse clumps and polyhedra, and the stagnation f(theta), before the
-    // run, for the particles placed by hand and those inserted later.
+    // Resolved bodies need a heat grid of their shape: checked here for the particles placed by
+    // hand and those inserted later.
     std::vector<std::tuple<int, int, std::string>> kinds; // (material, shape, where)
     for (std::size_t k = 0; k < sys.spec().particles.size(); ++k) {
         const auto& ps = sys.spec().particles[k];
@@ -163,22 +160,20 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
         const auto& ins = sys.spec().inserts[k];
         kinds.emplace_back(ins.material, ins.shape, fmt::format("insert block {}", k));
     }
+    std::vector<char> checked(sys.spec().shapes.size(), 0); // each template once
     for (const auto& [material, shape, where] : kinds) {
         const auto m = static_cast<std::size_t>(material);
-        if (shape < 0 || choice_[m].used != heat::HeatModel::resolved) {
+        if (shape < 0 || choice_[m].used != heat::HeatModel::resolved ||
+            checked[static_cast<std::size_t>(shape)] != 0) {
             continue;
         }
+        checked[static_cast<std::size_t>(shape)] = 1;
         try {
-            (void)heat_shape(sys.spec().shapes[static_cast<std::size_t>(shape)], mats[m].name);
+            heat::validate(heat_shape(sys.spec().shapes[static_cast<std::size_t>(shape)]));
         } catch (const InputError& e) {
-            throw InputError(fmt::format("{} ({})", e.what(), where));
-        }
-        if (spec_.stagnation && spec_.heat_transfer_coefficient > 0.0) {
             throw InputError(fmt::format(
-                "heat: stagnation = true with resolved bodies (material \"{}\", {}): f(theta) "
-                "is built into a template's matrix and a body turns; not yet (use "
-                "stagnation = false or the lumped model)",
-                mats[m].name, where));
+                "{} (resolved material \"{}\", shape template \"{}\", {})", e.what(), mats[m].name,
+                sys.spec().shapes[static_cast<std::size_t>(shape)].name, where));
         }
     }
     // Gas-gap conduction is a sphere-pair model (Cheng et al. 1999): refuse heated bodies. The
@@ -267,14 +262,17 @@ int ThermalSystem::template_for(const dynamics::System& sys, std::size_t i) {
         heat::CartesianResolution cr;
         cr.cells_across = mh.cells_across;
         const heat::Shape shape =
-            body != nullptr ? heat_shape(*body, material_names_[static_cast<std::size_t>(material)])
-                            : heat::Shape{heat::Sphere{radius}};
+            body != nullptr ? heat_shape(*body) : heat::Shape{heat::Sphere{radius}};
         t->grid = std::make_shared<const heat::ThermalGrid>(heat::make_cartesian_grid(shape, cr));
     }
     // Spheres have no orientation: body frame = world axes, so the stagnation direction is the
-    // same in every sphere and the local h goes into the template matrix exactly (resolved bodies
-    // with stagnation are refused in the constructor).
-    if (spec_.heat_transfer_coefficient > 0.0 && spec_.stagnation) {
+    // same in every sphere and the local h goes into the template matrix exactly. Bodies turn:
+    // their matrix keeps the uniform mean h, and h f(theta) of the body's current orientation
+    // enters as the lagged correction of convection.hpp (thermal_step).
+    if (spec_.heat_transfer_coefficient > 0.0 && spec_.stagnation && body != nullptr) {
+        t->h_face = {spec_.heat_transfer_coefficient};
+        t->turning_stagnation = true;
+    } else if (spec_.heat_transfer_coefficient > 0.0 && spec_.stagnation) {
         t->h_face = heat::stagnation_distribution(*t->grid, -spec_.flow_direction,
                                                   spec_.heat_transfer_coefficient);
     } else if (spec_.heat_transfer_coefficient > 0.0) {
@@ -290,6 +288,9 @@ int ThermalSystem::template_for(const dynamics::System& sys, std::size_t i) {
     const heat::ResolvedOperator& first = operator_for(*t, 1, 0);
     t->capacity = first.cell_capacity();
     t->total_capacity = first.total_capacity();
+    // rho c_p h^3: capacity / volume fraction of any cell (the fraction is volume / h^3).
+    const auto c0 = static_cast<std::size_t>(t->grid->centre_cell);
+    t->full_cell_capacity = t->spherical ? 0.0 : t->capacity[c0] / t->grid->volume_fraction[c0];
     templates_.push_back(std::move(t));
     const int index = static_cast<int>(templates_.size()) - 1;
     template_index_[key] = index;
@@ -352,6 +353,8 @@ void ThermalSystem::sync(const dynamics::System& sys) {
             pool_template_.push_back(r.templ);
             face_offset_.push_back(face_rate_.size());
             face_rate_.resize(face_rate_.size() + g.boundary.size(), 0.0);
+            stag_h_.resize(face_rate_.size(), 0.0);
+            conv_rate_.resize(face_rate_.size(), 0.0);
         }
         by_id_[static_cast<std::size_t>(id)] = r;
         slot_ids_.push_back(id);
@@ -445,14 +448,16 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
         int mat_j = 0;
         double rj = 0.0;
         if (rec.wall) {
-            if (rec.j >= spec_.wall_temperature.size()) {
-                continue; // a mesh wall (indices after the analytic walls): adiabatic for now
-            }
-            d.wall_temperature = spec_.wall_temperature[rec.j];
+            // Analytic walls first, then the mesh walls (the contact keys' order).
+            const std::size_t n_walls = spec_.wall_temperature.size();
+            const bool mesh = rec.j >= n_walls;
+            d.wall_temperature =
+                mesh ? spec_.mesh_wall_temperature[rec.j - n_walls] : spec_.wall_temperature[rec.j];
             if (std::isnan(d.wall_temperature)) {
                 continue;
             }
-            mat_j = sys.spec().walls[rec.j].material;
+            mat_j = mesh ? sys.spec().mesh_walls[rec.j - n_walls].material
+                         : sys.spec().walls[rec.j].material;
         } else {
             d.b = by_id_[static_cast<std::size_t>(p.id[rec.j])];
             if (d.b.slot < 0) {
@@ -488,12 +493,15 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
         // Patches under the contact disc, in each body frame: world offsets and normals turned
         // by q^-1 for bodies (world -> body); spheres have no orientation (world axes).
         const auto patches = [&](const Record& r, std::uint32_t k, bool body, const Vec3& n) {
-            const auto& g = *templates_[static_cast<std::size_t>(r.templ)]->grid;
-            if (!body) {
-                return heat::contact_patches(g, rec.point - p.x[k], n, rc);
+            const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
+            const Quat inv = body ? p.q[k].conjugate() : Quat::Identity();
+            const Vec3 x = inv * (rec.point - p.x[k]);
+            const Vec3 nb = inv * n;
+            std::vector<int> out = heat::contact_patches(*t.grid, x, nb, rc);
+            if (!t.spherical) {
+                widen_to_one_cell(*t.grid, t.capacity, t.full_cell_capacity, x, nb, out);
             }
-            const Quat inv = p.q[k].conjugate();
-            return heat::contact_patches(g, inv * (rec.point - p.x[k]), inv * n, rc);
+            return out;
         };
         if (d.a.templ >= 0) {
             d.patches_a = patches(d.a, rec.i, body_i, rec.normal);
@@ -520,6 +528,28 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
             const Record& r = by_id_[static_cast<std::size_t>(p.id[i])];
             worst = std::max(worst, g_sum[i] / capacity_of(r));
         }
+    }
+    // Bodies under f(theta): h per face for the current orientation (flow direction turned into
+    // the body frame with q^-1); the lagged part (G_b(h f) - G_b(h)) / C_cell joins the lag limit.
+    std::vector<char> stagnant(static_cast<std::size_t>(pool_.size()), 0);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        const Record& r = by_id_[static_cast<std::size_t>(p.id[i])];
+        if (r.templ < 0 || !templates_[static_cast<std::size_t>(r.templ)]->turning_stagnation) {
+            continue;
+        }
+        const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
+        const std::vector<double> hf = heat::stagnation_distribution(
+            *t.grid, p.q[i].conjugate() * (-spec_.flow_direction), spec_.heat_transfer_coefficient);
+        const std::size_t off = face_offset_[static_cast<std::size_t>(r.slot)];
+        for (std::size_t b = 0; b < hf.size(); ++b) {
+            stag_h_[off + b] = hf[b];
+            const heat::BoundaryFace& f = t.grid->boundary[b];
+            const double dg =
+                heat::surface_conductance(f, hf[b], t.props.conductivity) -
+                heat::surface_conductance(f, spec_.heat_transfer_coefficient, t.props.conductivity);
+            worst = std::max(worst, std::abs(dg) / t.capacity[static_cast<std::size_t>(f.cell)]);
+        }
+        stagnant[static_cast<std::size_t>(r.slot)] = 1;
     }
     // Lag limit: sub-steps (a power of two, so few operators are built) keep
     // dt_sub * worst <= lag_safety.
@@ -598,6 +628,27 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
                 dt_sub * (h * a * (spec_.ambient_temperature - t_new) + spec_.flux * a);
             lumped_[k] = t_new;
         }
+        // Bodies under f(theta): the lagged convection correction from the field at the start of
+        // the sub-step, added to the contact rates (and booked as external heat below).
+        const double t_inf = spec_.ambient_temperature;
+        const double h_mean = spec_.heat_transfer_coefficient;
+        for (int slot = 0; slot < pool_.size(); ++slot) {
+            if (stagnant[static_cast<std::size_t>(slot)] == 0) {
+                continue;
+            }
+            const Template& t = *templates_[static_cast<std::size_t>(
+                pool_template_[static_cast<std::size_t>(slot)])];
+            const std::size_t off = face_offset_[static_cast<std::size_t>(slot)];
+            const std::size_t nb = t.grid->boundary.size();
+            const std::span<double> conv(conv_rate_.data() + off, nb);
+            heat::lagged_convection(*t.grid, t.props.conductivity,
+                                    std::span<const double>(stag_h_.data() + off, nb),
+                                    std::span<const double>(&h_mean, 1),
+                                    std::span<const double>(&t_inf, 1), pool_.field(slot), conv);
+            for (std::size_t b = 0; b < nb; ++b) {
+                face_rate_[off + b] += conv[b];
+            }
+        }
         // Resolved particles: one backward-Euler solve each with the lagged heat rates. The solves
         // are independent: threads take slots, each with its own operator (built here, outside
         // the parallel loop); the sums below run in slot order, so results do not depend on the
@@ -632,9 +683,12 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
             const Template& t = *templates_[static_cast<std::size_t>(
                 pool_template_[static_cast<std::size_t>(slot)])];
             const double* rates = face_rate_.data() + face_offset_[static_cast<std::size_t>(slot)];
-            double contact_in = 0.0;
+            double contact_in = 0.0; // lagged contact rates: internal, not external heat
+            const bool conv = stagnant[static_cast<std::size_t>(slot)] != 0;
+            const double* conv_rates =
+                conv_rate_.data() + face_offset_[static_cast<std::size_t>(slot)];
             for (std::size_t b = 0; b < t.grid->boundary.size(); ++b) {
-                contact_in += rates[b];
+                contact_in += rates[b] - (conv ? conv_rates[b] : 0.0);
             }
             external_heat_ += rep.heat_in - dt_sub * contact_in;
             ++counters_.solves;

@@ -187,7 +187,12 @@ class ThermalSystem {
     std::vector<ContactData> data_;
     std::vector<double> face_rate_;        // heat rate per boundary face of every pool slot (W)
     std::vector<std::size_t> face_offset_; // first face of each pool slot
-    std::vector<double> lumped_rate_;      // contact heat rate per lumped slot (W)
+    // Resolved bodies under the stagnation distribution (same layout as face_rate_): h f(theta)
+    // per face for the body's orientation at this thermal step (W/(m^2 K)) and its lagged
+    // correction to the template's uniform h per sub-step (W).
+    std::vector<double> stag_h_;
+    std::vector<double> conv_rate_;
+    std::vector<double> lumped_rate_; // contact heat rate per lumped slot (W)
     double external_heat_ = 0;
     ThermalCounters counters_;
     std::vector<std::string> warnings_;

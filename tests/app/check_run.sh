@@ -67,6 +67,18 @@ cmp "$out/heat/monitors.csv" "$out/heat_cont/monitors.csv" || { echo "heat resta
 awk -F, 'NR > 1 && $3 > 300.000001 { hot = 1 } END { exit !hot }' "$out/heat/monitors.csv" \
     || { echo "the hot floor heated nothing"; exit 1; }
 
+# `kiln check` refuses what `kiln run` refuses at start-up (scene set-up, not the reader): a time
+# step above the Rayleigh step.
+sed 's/^time_step = 1e-5/time_step = 1e-3/' "$out/heat.toml" > "$out/big_step.toml"
+set +e
+msg=$("$kiln" check "$out/big_step.toml" 2>&1)
+code=$?
+set -e
+[ "$code" -eq 2 ] || { echo "time step above Rayleigh: check exit code $code, expected 2"; exit 1; }
+echo "$msg" | grep -q "simulation.time_step: .*must be below the Rayleigh step" \
+    || { echo "unexpected check message: $msg"; exit 1; }
+"$kiln" check "$out/heat.toml" > /dev/null || { echo "check refused the good heat case"; exit 1; }
+
 set +e
 msg=$("$kiln" check "$here/bad.toml" 2>&1)
 code=$?

@@ -4,6 +4,8 @@
 #include "core/error.hpp"
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <gtest/gtest.h>
 #include <string>
 
@@ -194,6 +196,50 @@ TEST(CaseReaderHeat, HotWallNeedsAMaterialWithConductivity) {
     const std::string e = error_of(edit("material = \"glass\"\nmin", "material = \"steel\"\nmin"));
     EXPECT_NE(e.find("wall[0].temperature"), std::string::npos) << e;
     EXPECT_NE(e.find("no heat table"), std::string::npos) << e;
+}
+
+/// A folder holding a 2 x 2 m plate in z = 0 facing +z (plate.obj) for mesh-wall cases.
+struct PlateFolder {
+    std::filesystem::path dir;
+    PlateFolder() : dir(std::filesystem::temp_directory_path() / "kiln_heat_mesh_wall") {
+        std::filesystem::create_directories(dir);
+        std::ofstream(dir / "plate.obj") << "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
+                                            "f 1 2 3\nf 1 3 4\n";
+    }
+    ~PlateFolder() { std::filesystem::remove_all(dir); }
+    PlateFolder(const PlateFolder&) = delete;
+    PlateFolder& operator=(const PlateFolder&) = delete;
+    [[nodiscard]] std::string path() const { return (dir / "case.toml").string(); }
+};
+
+/// The base case with its hot box replaced by the plate at `keys` (material, temperature).
+std::string with_plate(const std::string& keys) {
+    return edit("type = \"box\"\nmaterial = \"glass\"\nmin = [0, 0, 0]\nmax = [0.02, 0.02, "
+                "0.04]\ntemperature = 600",
+                "type = \"mesh\"\nfile = \"plate.obj\"\n" + keys);
+}
+
+TEST(CaseReaderHeat, MeshWallTakesATemperature) {
+    const PlateFolder folder;
+    const CaseSpec c =
+        read_case_text(with_plate("material = \"glass\"\ntemperature = 550\n"), folder.path());
+    ASSERT_EQ(c.heat.mesh_wall_temperature.size(), 1U);
+    EXPECT_EQ(c.heat.mesh_wall_temperature[0], 550.0);
+    EXPECT_TRUE(c.heat.wall_temperature.empty());
+    // Without the key the mesh wall is adiabatic.
+    const CaseSpec a = read_case_text(with_plate("material = \"glass\"\n"), folder.path());
+    ASSERT_EQ(a.heat.mesh_wall_temperature.size(), 1U);
+    EXPECT_TRUE(std::isnan(a.heat.mesh_wall_temperature[0]));
+    // A material without a heat table cannot conduct: located error.
+    try {
+        (void)read_case_text(with_plate("material = \"steel\"\ntemperature = 550\n"),
+                             folder.path());
+        FAIL() << "a hot mesh wall of a material without heat must be refused";
+    } catch (const InputError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("wall[0].temperature"), std::string::npos) << what;
+        EXPECT_NE(what.find("no heat table"), std::string::npos) << what;
+    }
 }
 
 } // namespace
