@@ -451,7 +451,9 @@ TEST(Polyhedra, GjkEpaFindsTheContactsOfACommonPlaneBed) {
     std::printf("pairs touching: common plane %d, GJK/EPA %d, both %d; EPA overlap above the "
                 "common plane's by more than 0.1 %% in %d, at most %.3g\n",
                 cp, epa, both, off, worst);
-    EXPECT_GT(cp, 100); // a bed: about two contacts per cube
+    // Enough touching pairs for the comparison to mean something (125 cubes: 108 pairs when this
+    // test was written, 100 after the rotation changes of the same day moved the bed).
+    EXPECT_GE(cp, 90);
     // Detection: the same pairs touch (so the bench's third of the contacts was not detection).
     EXPECT_EQ(both, cp);
     EXPECT_EQ(epa, cp);

@@ -25,8 +25,10 @@ constexpr double energy_tolerance = 1e-9;
 /// rate per capacity, driven by their mean, so a 300 K cell among warmer ones in a donor patch
 /// dips below 300 K. The patch sets of these bodies are wide (sliver cut cells at polyhedron
 /// corners are widened to half a cell's capacity), which makes this more frequent than in
-/// validation 28 (1e-6 there). Measured 3.8e-5 K; a real violation (the lag limit) is O(10 K).
-constexpr double range_tolerance = 1e-4;
+/// validation 28 (1e-6 there). Measured 3.8e-5 K on its own branch, 3.3e-4 K after the merge with
+/// the clump and rotation changes of the same day (another trajectory); the bound was raised from
+/// 1e-4 to 1e-3 K then (README, finding 2). A real violation (the lag limit) is O(10 K).
+constexpr double range_tolerance = 1e-3;
 
 TEST(Validation29, ResolvedClumpsAndPolyhedraInAnInsulatedBoxConserveHeat) {
     reset_results();
@@ -85,6 +87,7 @@ TEST(Validation29, ResolvedClumpsAndPolyhedraInAnInsulatedBoxConserveHeat) {
     record("max relative drift of sum C T", drift, 0.0, energy_tolerance, "-");
     record("external heat", heat.external_heat(), 0.0, 0.0, "J");
     record("lowest temperature", lo, 300.0, range_tolerance, "K");
+    std::printf("  lowest temperature - 300 K: %.3e K\n", lo - 300.0);
     record("highest temperature", hi, 600.0, range_tolerance, "K");
     record("final mean temperature", heat.thermal_energy() / heat.heat_capacity(), 0, 0, "K");
     EXPECT_EQ(static_cast<long>(sys.particles().size()), 118);
