@@ -282,6 +282,25 @@ void MeshWall::candidates(const Vec3& lo, const Vec3& hi, std::vector<int>& out)
     out.erase(std::unique(out.begin(), out.end()), out.end());
 }
 
+void MeshWall::file_by_region(MeshContact m, int t, int region, std::vector<MeshContact>& out,
+                              std::vector<MeshContact>& edges,
+                              std::vector<MeshContact>& verts) const {
+    const auto ti = static_cast<std::size_t>(t);
+    if (region == 0) {
+        m.feature = MeshFeature::kFace;
+        m.id = t;
+        out.push_back(m);
+    } else if (region <= 3) {
+        m.feature = MeshFeature::kEdge;
+        m.id = tri_edges_[ti][static_cast<std::size_t>(region - 1)];
+        edges.push_back(m);
+    } else {
+        m.feature = MeshFeature::kVertex;
+        m.id = triangles_[ti][static_cast<std::size_t>(region - 4)];
+        verts.push_back(m);
+    }
+}
+
 void MeshWall::sphere_contacts(const Vec3& c, double r, std::vector<MeshContact>& out) const {
     out.clear();
     thread_local std::vector<int> tris;
@@ -311,19 +330,7 @@ void MeshWall::sphere_contacts(const Vec3& c, double r, std::vector<MeshContact>
         // Temporarily 1 when the contact represents the triangle's plane (see the thinning).
         m.patch_area =
             1.0 - m.normal.dot(normals_[static_cast<std::size_t>(t)]) < kParallel ? 1.0 : 0.0;
-        if (region == 0) {
-            m.feature = MeshFeature::kFace;
-            m.id = t;
-            out.push_back(m);
-        } else if (region <= 3) {
-            m.feature = MeshFeature::kEdge;
-            m.id = tri_edges_[static_cast<std::size_t>(t)][static_cast<std::size_t>(region - 1)];
-            edges.push_back(m);
-        } else {
-            m.feature = MeshFeature::kVertex;
-            m.id = tri[static_cast<std::size_t>(region - 4)];
-            verts.push_back(m);
-        }
+        file_by_region(m, t, region, out, edges, verts);
     }
     thin(out, edges, verts, r);
 }
@@ -717,19 +724,7 @@ int MeshWall::superquadric_contacts(const PosedSuperquadric& s, double r,
                 m.point = q;
             }
         }
-        if (region == 0) {
-            m.feature = MeshFeature::kFace;
-            m.id = t;
-            out.push_back(m);
-        } else if (region <= 3) {
-            m.feature = MeshFeature::kEdge;
-            m.id = tri_edges_[static_cast<std::size_t>(t)][static_cast<std::size_t>(region - 1)];
-            edges.push_back(m);
-        } else {
-            m.feature = MeshFeature::kVertex;
-            m.id = triangles_[static_cast<std::size_t>(t)][static_cast<std::size_t>(region - 4)];
-            verts.push_back(m);
-        }
+        file_by_region(m, t, region, out, edges, verts);
     }
     thin(out, edges, verts, r);
     for (MeshContact& m : out) {

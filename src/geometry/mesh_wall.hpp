@@ -101,6 +101,10 @@ class MeshWall {
     /// edge and vertex contacts that survive (sphere radius r (m)).
     void thin(std::vector<MeshContact>& out, std::vector<MeshContact>& edges,
               std::vector<MeshContact>& verts, double r) const;
+    /// Files contact m of triangle t by the Voronoi region of its closest point (0 face, 1-3 edge
+    /// k-1, 4-6 vertex k-4): sets its feature and id and appends it to out, edges or verts.
+    void file_by_region(MeshContact m, int t, int region, std::vector<MeshContact>& out,
+                        std::vector<MeshContact>& edges, std::vector<MeshContact>& verts) const;
     /// Corner positions of triangle t (m, world).
     [[nodiscard]] std::array<Vec3, 3> corners(int t) const;
 
