@@ -11,64 +11,37 @@ set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 repo="$(cd "$here/../.." && pwd)"
-steps="${STEPS:-20000}"
-kiln="${KILN:-$repo/build/src/app/kiln}"
-work="${WORK:-$(mktemp -d /tmp/kiln_vs_liggghts.XXXXXX)}"
+source "$here/common.sh"
 sizes=("$@")
 [ ${#sizes[@]} -eq 0 ] && sizes=(5000)
 
-if ! command -v liggghts > /dev/null; then
-    # --no-install-recommends: the recommended packages pull ParaView and remove libvtk9-dev.
-    apt-get install -y --no-install-recommends liggghts
-fi
-[ -x "$kiln" ] || { echo "compare.sh: kiln binary not found at $kiln (set KILN)" >&2; exit 1; }
-
-end_time=$(/usr/bin/python3 -c "print(repr($steps * 1e-5))")
+liggghts_prepare compare.sh kiln_vs_liggghts
 echo "# kiln vs LIGGGHTS 3.8, in.pour_spheres, $steps steps of 1e-5 s; LIGGGHTS 1 thread, kiln ${KILN_THREADS:-1}; $(date -u '+%F %T UTC')"
-echo "# host: $(nproc) cores; load before: $(uptime | sed 's/.*load average: //'); work: $work"
 
 results=()
 for n in "${sizes[@]}"; do
-    dir="$work/n$n"
-    mkdir -p "$dir"
-    cp "$here/in.pour_spheres" "$dir/"
-    (cd "$dir" && OMP_NUM_THREADS=1 liggghts -in in.pour_spheres -var N "$n" -var steps "$steps" \
-        -log log.liggghts > liggghts.out 2>&1) || { echo "LIGGGHTS failed, see $dir" >&2; exit 1; }
-    sed -e "s/^count = .*/count = $n/" -e "s/^end_time = .*/end_time = $end_time/" \
-        "$here/pour_spheres.toml" > "$dir/case.toml"
-    (cd "$dir" && OMP_NUM_THREADS="${KILN_THREADS:-1}" "$kiln" run case.toml --out kiln \
-        > kiln.out 2>&1) || { echo "kiln failed, see $dir" >&2; exit 1; }
-    results+=("$n:$dir")
+    liggghts_run_pair "$n" "$here/in.pour_spheres" "$here/pour_spheres.toml"
 done
 echo "# load after: $(uptime | sed 's/.*load average: //')"
 
-/usr/bin/python3 - "$steps" "${results[@]}" <<'PY'
-import json, re, sys
+/usr/bin/python3 - "$here" "$steps" "${results[@]}" <<'PY'
+import json, sys
 
-steps = int(sys.argv[1])
+sys.path.insert(0, sys.argv[1])
+from liggghts_log import read_log
+
+steps = int(sys.argv[2])
 
 def liggghts(log):
-    """Loop time of the last run and the last thermo row (columns by header name: KinEng = ke, cnave = c_cnave)."""
-    loop, header, rows = None, None, []
-    for line in open(log):
-        w = line.split()
-        if w[:1] == ["Step"]:
-            header, rows = w, []
-        elif line.startswith("Loop time"):
-            loop = float(re.search(r"Loop time of ([0-9.eE+-]+)", line).group(1))
-        elif header and len(w) == len(header):
-            try:
-                rows.append(dict(zip(header, map(float, w))))
-            except ValueError:
-                pass
-    last = rows[-1]
+    """Loop time and, from the last thermo row, atoms, kinetic energy (ke) and c_cnave."""
+    loop, last = read_log(log)
     return loop, last["Atoms"], last["KinEng"], last["cnave"]
 
 def rel(a, b):
     return abs(a - b) / abs(b) if b else float("nan")
 
 perf, phys = [], []
-for item in sys.argv[2:]:
+for item in sys.argv[3:]:
     n, d = item.split(":", 1)
     loop, atoms, ke_l, cn_l = liggghts(f"{d}/log.liggghts")
     s = json.load(open(f"{d}/kiln/summary.json"))

@@ -15,62 +15,32 @@ set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 repo="$(cd "$here/../.." && pwd)"
-steps="${STEPS:-20000}"
-kiln="${KILN:-$repo/build/src/app/kiln}"
+source "$here/common.sh"
 peers="${PEERS:-/work/shared/peers/liggghts}"
-work="${WORK:-$(mktemp -d /tmp/kiln_vs_liggghts_ms.XXXXXX)}"
 sizes=("$@")
 [ ${#sizes[@]} -eq 0 ] && sizes=(2000)
-
-if ! command -v liggghts > /dev/null; then
-    # --no-install-recommends: the recommended packages pull ParaView and remove libvtk9-dev.
-    apt-get install -y --no-install-recommends liggghts
-fi
-[ -x "$kiln" ] || { echo "compare_multisphere.sh: kiln binary not found at $kiln (set KILN)" >&2; exit 1; }
 [ -f "$peers/in.pour_multisphere" ] || { echo "compare_multisphere.sh: $peers/in.pour_multisphere missing (set PEERS)" >&2; exit 1; }
 
-end_time=$(/usr/bin/python3 -c "print(repr($steps * 1e-5))")
+liggghts_prepare compare_multisphere.sh kiln_vs_liggghts_ms
 echo "# kiln clumps vs LIGGGHTS 3.8 multisphere, in.pour_multisphere, $steps steps of 1e-5 s; LIGGGHTS 1 thread, kiln ${KILN_THREADS:-1}; $(date -u '+%F %T UTC')"
-echo "# host: $(nproc) cores; load before: $(uptime | sed 's/.*load average: //'); work: $work"
 
 results=()
 for n in "${sizes[@]}"; do
-    dir="$work/n$n"
-    mkdir -p "$dir"
-    cp "$peers/in.pour_multisphere" "$here/dimer_2mm.toml" "$dir/"
-    (cd "$dir" && OMP_NUM_THREADS=1 liggghts -in in.pour_multisphere -var N "$n" -var steps "$steps" \
-        -log log.liggghts > liggghts.out 2>&1) || { echo "LIGGGHTS failed, see $dir" >&2; exit 1; }
-    sed -e "s/^count = .*/count = $n/" -e "s/^end_time = .*/end_time = $end_time/" \
-        "$here/pour_multisphere.toml" > "$dir/case.toml"
-    (cd "$dir" && OMP_NUM_THREADS="${KILN_THREADS:-1}" "$kiln" run case.toml --out kiln \
-        > kiln.out 2>&1) || { echo "kiln failed, see $dir" >&2; exit 1; }
-    results+=("$n:$dir")
+    liggghts_run_pair "$n" "$peers/in.pour_multisphere" "$here/pour_multisphere.toml" \
+        "$here/dimer_2mm.toml"
 done
 echo "# load after: $(uptime | sed 's/.*load average: //')"
 
-/usr/bin/python3 - "$steps" "${results[@]}" <<'PY'
-import json, re, sys
+/usr/bin/python3 - "$here" "$steps" "${results[@]}" <<'PY'
+import json, sys
 
-steps = int(sys.argv[1])
+sys.path.insert(0, sys.argv[1])
+from liggghts_log import read_log as liggghts
 
-def liggghts(log):
-    """Loop time of the last run and the last thermo row (columns by header name)."""
-    loop, header, rows = None, None, []
-    for line in open(log):
-        w = line.split()
-        if w[:1] == ["Step"]:
-            header, rows = w, []
-        elif line.startswith("Loop time"):
-            loop = float(re.search(r"Loop time of ([0-9.eE+-]+)", line).group(1))
-        elif header and len(w) == len(header):
-            try:
-                rows.append(dict(zip(header, map(float, w))))
-            except ValueError:
-                pass
-    return loop, rows[-1]
+steps = int(sys.argv[2])
 
 perf, phys = [], []
-for item in sys.argv[2:]:
+for item in sys.argv[3:]:
     n, d = item.split(":", 1)
     loop, last = liggghts(f"{d}/log.liggghts")
     s = json.load(open(f"{d}/kiln/summary.json"))
