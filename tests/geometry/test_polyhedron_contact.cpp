@@ -2,6 +2,8 @@
 // edge-face and edge-edge cases with their patches, continuity from edge-on to face-on, optimality
 // of the plane against sampled directions and against libccd's EPA, pair-order symmetry.
 
+#include "geometry/hull.hpp"
+#include "geometry/polyhedron.hpp"
 #include "geometry/polyhedron_contact.hpp"
 #include "io/shape_reader.hpp"
 
@@ -15,6 +17,7 @@
 #include <gtest/gtest.h>
 #include <numbers>
 #include <random>
+#include <string>
 
 namespace g = kiln::geometry;
 using kiln::Quat;
@@ -253,14 +256,8 @@ RandomPair random_pair(const g::PolyhedronFeatures& fa, const g::PolyhedronFeatu
     return p;
 }
 
-TEST(PolyhedronContact, PlaneIsOptimalAndAgreesWithEpa) {
-    const char* names[] = {"cube",        "cuboid_6x6x5", "plate_10x9x2", "pyramid",
-                           "icosahedron", "cylinder_8",   "cylinder_16"};
-    std::vector<g::PolyhedronFeatures> shapes;
-    for (const char* n : names) {
-        shapes.push_back(load(n));
-    }
-    // 500 directions spread over the sphere (Fibonacci lattice) for the sampled minimum.
+/// 500 directions spread over the sphere (Fibonacci lattice) for a sampled minimum.
+std::vector<Vec3> fibonacci_directions() {
     std::vector<Vec3> dirs;
     for (int k = 0; k < 500; ++k) {
         const double z = 1.0 - (2.0 * k + 1.0) / 500.0;
@@ -268,6 +265,45 @@ TEST(PolyhedronContact, PlaneIsOptimalAndAgreesWithEpa) {
         dirs.emplace_back(std::sqrt(1 - z * z) * std::cos(phi),
                           std::sqrt(1 - z * z) * std::sin(phi), z);
     }
+    return dirs;
+}
+
+/// The common plane of a touching pair is optimal: its overlap is the overlap along its normal,
+/// and neither a sampled direction nor any cross product of two edges (every separating-axis
+/// candidate, here without the Gauss-map and distance pruning of polyhedron_contact) has a smaller
+/// one.
+void expect_optimal(const RandomPair& p, const g::PolyhedronFeatures& fa,
+                    const g::PolyhedronFeatures& fb, const std::vector<Vec3>& dirs) {
+    const double scale = fa.radius + fb.radius;
+    const g::PolyhedronContact c = g::polyhedron_contact(p.a, p.b);
+    ASSERT_TRUE(c.touching);
+    EXPECT_NEAR(overlap_along(p.a, p.b, c.normal), c.depth, kExact * scale);
+    for (const Vec3& d : dirs) {
+        ASSERT_GE(overlap_along(p.a, p.b, d), c.depth - kExact * scale);
+    }
+    for (const auto& ea : fa.edges) {
+        const Vec3 da = p.a.q * (fa.vertices[static_cast<std::size_t>(ea[1])] -
+                                 fa.vertices[static_cast<std::size_t>(ea[0])]);
+        for (const auto& eb : fb.edges) {
+            const Vec3 db = p.b.q * (fb.vertices[static_cast<std::size_t>(eb[1])] -
+                                     fb.vertices[static_cast<std::size_t>(eb[0])]);
+            const Vec3 axis = da.cross(db);
+            if (axis.norm() > 1e-9 * da.norm() * db.norm()) {
+                ASSERT_GE(overlap_along(p.a, p.b, axis.normalized()), c.depth - kExact * scale);
+                ASSERT_GE(overlap_along(p.a, p.b, -axis.normalized()), c.depth - kExact * scale);
+            }
+        }
+    }
+}
+
+TEST(PolyhedronContact, PlaneIsOptimalAndAgreesWithEpa) {
+    const char* names[] = {"cube",        "cuboid_6x6x5", "plate_10x9x2", "pyramid",
+                           "icosahedron", "cylinder_8",   "cylinder_16"};
+    std::vector<g::PolyhedronFeatures> shapes;
+    for (const char* n : names) {
+        shapes.push_back(load(n));
+    }
+    const std::vector<Vec3> dirs = fibonacci_directions();
     std::mt19937_64 rng(7);
     double worst_epa = 0.0;
     int pairs = 0;
@@ -284,31 +320,8 @@ TEST(PolyhedronContact, PlaneIsOptimalAndAgreesWithEpa) {
                     continue;
                 }
                 ++pairs;
-                // The reported overlap is the overlap along the reported normal ...
-                EXPECT_NEAR(overlap_along(p.a, p.b, c.normal), c.depth, kExact * scale);
-                // ... and no sampled direction has a smaller one, nor any cross product of two
-                // edges (the separating-axis candidates, here without the Gauss-map pruning).
-                for (const Vec3& d : dirs) {
-                    ASSERT_GE(overlap_along(p.a, p.b, d), c.depth - kExact * scale);
-                }
-                for (const auto& ea : shapes[i].edges) {
-                    const Vec3 da = p.a.q * (shapes[i].vertices[static_cast<std::size_t>(ea[1])] -
-                                             shapes[i].vertices[static_cast<std::size_t>(ea[0])]);
-                    for (const auto& eb : shapes[j].edges) {
-                        const Vec3 db =
-                            p.b.q * (shapes[j].vertices[static_cast<std::size_t>(eb[1])] -
-                                     shapes[j].vertices[static_cast<std::size_t>(eb[0])]);
-                        const Vec3 axis = da.cross(db);
-                        if (axis.norm() > 1e-9 * da.norm() * db.norm()) {
-                            ASSERT_GE(overlap_along(p.a, p.b, axis.normalized()),
-                                      c.depth - kExact * scale)
-                                << names[i] << " " << names[j];
-                            ASSERT_GE(overlap_along(p.a, p.b, -axis.normalized()),
-                                      c.depth - kExact * scale)
-                                << names[i] << " " << names[j];
-                        }
-                    }
-                }
+                SCOPED_TRACE(std::string(names[i]) + " on " + names[j]);
+                expect_optimal(p, shapes[i], shapes[j], dirs);
                 // Every contact point and patch corner lies in both bodies.
                 for (const Vec3& x : c.points) {
                     EXPECT_LT(outside(p.a, x), 1e-10 * scale);
@@ -455,6 +468,45 @@ TEST(PolyhedronContact, AgreesWithFcl) {
     // A reference that misses overlaps is reported, not trusted: at most 5 % of the queries (two
     // per pair).
     EXPECT_LE(missed, compared / 10);
+}
+
+TEST(PolyhedronContact, ManyEdgedRandomHullsStayOptimal) {
+    // Hulls of 26 random points (as Yade's random polyhedra, bench/yade): ~70 feature edges each,
+    // where the edge stage drops most edges by their distance from the other body. The plane
+    // must stay the optimum over all edge pairs, unpruned, and over sampled directions.
+    std::mt19937_64 rng(19);
+    std::normal_distribution<double> nd;
+    std::vector<g::PolyhedronFeatures> shapes;
+    for (int k = 0; k < 4; ++k) {
+        std::vector<Vec3> pts;
+        for (int i = 0; i < 26; ++i) {
+            pts.push_back(Vec3(nd(rng), nd(rng), nd(rng)).normalized() * 4e-3 *
+                          (0.6 + 0.4 * std::abs(nd(rng)) / (1.0 + std::abs(nd(rng)))));
+        }
+        const g::Hull h = g::convex_hull(pts, "random hull");
+        shapes.push_back(g::polyhedron_features(g::make_polyhedron(h.vertices, h.faces, "hull")));
+        EXPECT_GT(shapes.back().edges.size(), 30U);
+    }
+    const std::vector<Vec3> dirs = fibonacci_directions();
+    int pairs = 0;
+    int edge_edge = 0;
+    for (std::size_t i = 0; i < shapes.size(); ++i) {
+        for (std::size_t j = 0; j < shapes.size(); ++j) {
+            for (int n = 0; n < 25; ++n) {
+                const RandomPair p = random_pair(shapes[i], shapes[j], rng);
+                const g::PolyhedronContact c = g::polyhedron_contact(p.a, p.b);
+                if (!c.touching) {
+                    continue;
+                }
+                ++pairs;
+                edge_edge += c.feature == g::CommonPlaneFeature::kEdgeEdge ? 1 : 0;
+                SCOPED_TRACE("hull " + std::to_string(i) + " on hull " + std::to_string(j));
+                expect_optimal(p, shapes[i], shapes[j], dirs);
+            }
+        }
+    }
+    std::printf("%d touching pairs, %d with an edge-edge plane\n", pairs, edge_edge);
+    EXPECT_GT(pairs, 200); // most of the 400 placements overlap
 }
 
 } // namespace
