@@ -127,9 +127,11 @@ struct Relative {
     // Per vertex, one bit per face plane it lies beyond by more than the current overlap.
     std::vector<std::uint64_t> mask_a, mask_b;
     std::vector<int> edges_a, edges_b; // feature edges kept for the edge-edge stage
+    bool pruned = false;               // edges_a/edges_b are valid for this pose
 };
 
 void make_relative(const PosedPolyhedron& a, const PosedPolyhedron& b, Relative& r) {
+    r.pruned = false;
     const Quat qab = a.q.conjugate() * b.q;
     r.rot = qab.toRotationMatrix();
     r.shift = a.q.conjugate() * (b.x - a.x);
@@ -188,12 +190,11 @@ void keep_edges(const std::vector<std::array<int, 4>>& edges, const std::vector<
     const std::size_t words = (nf + 63) / 64;
     mask.assign(nv * words, 0);
     for (std::size_t k = 0; k < nf; ++k) {
-        const std::uint64_t bit = std::uint64_t{1} << (k % 64);
-        const std::size_t w = k / 64;
+        const unsigned shift = static_cast<unsigned>(k % 64);
+        std::uint64_t* m = mask.data() + k / 64;
+        const double* d = dist.data() + k * nv;
         for (std::size_t v = 0; v < nv; ++v) {
-            if (dist[k * nv + v] > reach) {
-                mask[v * words + w] |= bit;
-            }
+            m[v * words] |= static_cast<std::uint64_t>(d[v] > reach) << shift;
         }
     }
     kept.clear();
@@ -237,14 +238,31 @@ PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b,
     const Vec3 v = m.cross(u);
 
     // Vertices of A n B: edges of each body clipped by the other's face planes.
+    // With the edge lists of the plane search, only the edges it kept: a dropped edge lies wholly
+    // outside one face plane of the other body, so its clip is empty anyway.
     std::vector<Vec3> raw;
-    for (const auto& e : fa.edges) {
+    const auto clip_a = [&](const std::array<int, 4>& e) {
         clip_edge(fa.vertices[static_cast<std::size_t>(e[0])],
                   fa.vertices[static_cast<std::size_t>(e[1])], r.nb, r.ob, raw);
-    }
-    for (const auto& e : fb.edges) {
+    };
+    const auto clip_b = [&](const std::array<int, 4>& e) {
         clip_edge(r.vb[static_cast<std::size_t>(e[0])], r.vb[static_cast<std::size_t>(e[1])],
                   fa.face_normals, fa.face_offsets, raw);
+    };
+    if (r.pruned) {
+        for (const int e : r.edges_a) {
+            clip_a(fa.edges[static_cast<std::size_t>(e)]);
+        }
+        for (const int e : r.edges_b) {
+            clip_b(fb.edges[static_cast<std::size_t>(e)]);
+        }
+    } else {
+        for (const auto& e : fa.edges) {
+            clip_a(e);
+        }
+        for (const auto& e : fb.edges) {
+            clip_b(e);
+        }
     }
     const double tol2 = 1e-24 * scale * scale;
     std::vector<Vec3> pts;
@@ -361,6 +379,7 @@ PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhe
         const double reach = -best + 1e-9 * (fa.radius + fb.radius);
         keep_edges(fa.edges, r.dist_a, r.nb.size(), nva, reach, r.mask_a, r.edges_a);
         keep_edges(fb.edges, r.dist_b, fa.face_normals.size(), nvb, reach, r.mask_b, r.edges_b);
+        r.pruned = true;
         for (const int ia : r.edges_a) {
             const auto& ea = fa.edges[static_cast<std::size_t>(ia)];
             const Vec3& na0 = fa.face_normals[static_cast<std::size_t>(ea[2])];
