@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <limits>
 #include <map>
 #include <numeric>
@@ -121,11 +120,9 @@ struct Relative {
     // the Gauss-map arc of the edge of -B.
     std::vector<std::array<Vec3, 3>> arcs;
     // Signed distances of the vertices of one body beyond the face planes of the other,
-    // face-major: dist_b[k * nvb + j] = n_a,k . vb_j - o_a,k and dist_a[k * nva + i] =
+    // vertex-major: dist_b[j * nfa + k] = n_a,k . vb_j - o_a,k and dist_a[i * nfb + k] =
     // n_b,k . va_i - o_b,k (m), filled by the face stages and used to prune the edge stage.
     std::vector<double> dist_b, dist_a;
-    // Per vertex, one bit per face plane it lies beyond by more than the current overlap.
-    std::vector<std::uint64_t> mask_a, mask_b;
     std::vector<int> edges_a, edges_b; // feature edges kept for the edge-edge stage
     bool pruned = false;               // edges_a/edges_b are valid for this pose
 };
@@ -181,29 +178,42 @@ bool is_minkowski_face(const Vec3& a, const Vec3& b, const Vec3& bxa, const Vec3
     return cba * dba < 0.0 && adc * bdc < 0.0 && cba * bdc > 0.0;
 }
 
-/// Edges of a body (`edges`, its vertices' distances beyond the other body's nf face planes in
-/// `dist`, face-major with nv vertices) that do not lie wholly beyond one plane by more than
-/// `reach`: their indices go to `kept`; `mask` is scratch (one bit per plane and vertex).
-void keep_edges(const std::vector<std::array<int, 4>>& edges, const std::vector<double>& dist,
-                std::size_t nf, std::size_t nv, double reach, std::vector<std::uint64_t>& mask,
-                std::vector<int>& kept) {
-    const std::size_t words = (nf + 63) / 64;
-    mask.assign(nv * words, 0);
-    for (std::size_t k = 0; k < nf; ++k) {
-        const unsigned shift = static_cast<unsigned>(k % 64);
-        std::uint64_t* m = mask.data() + k / 64;
-        const double* d = dist.data() + k * nv;
-        for (std::size_t v = 0; v < nv; ++v) {
-            m[v * words] |= static_cast<std::uint64_t>(d[v] > reach) << shift;
-        }
-    }
+/// Distance (m) from the segment p0-p1 to the point c.
+double segment_point_distance(const Vec3& p0, const Vec3& p1, const Vec3& c) {
+    const Vec3 d = p1 - p0;
+    const double dd = d.squaredNorm();
+    const double t = dd > 0.0 ? std::clamp((c - p0).dot(d) / dd, 0.0, 1.0) : 0.0;
+    return (p0 + t * d - c).norm();
+}
+
+/// Edges of a body (vertices `v`; their distances beyond the other body's nf face planes in
+/// `dist`, vertex-major) that pass within `reach` of the other body, to the test's precision:
+/// dropped are edges farther than `reach` from the other body's bounding sphere (centre `centre`,
+/// radius `radius`) and edges whose two ends lie beyond one face plane by more than `reach`.
+/// Their indices go to `kept`, in order.
+void keep_edges(const std::vector<std::array<int, 4>>& edges, const std::vector<Vec3>& v,
+                const std::vector<double>& dist, std::size_t nf, double reach, const Vec3& centre,
+                double radius, std::vector<int>& kept) {
     kept.clear();
+    std::size_t hint = 0; // the plane that dropped the last edge: it often drops the next too
     for (std::size_t e = 0; e < edges.size(); ++e) {
-        const std::uint64_t* m0 = &mask[static_cast<std::size_t>(edges[e][0]) * words];
-        const std::uint64_t* m1 = &mask[static_cast<std::size_t>(edges[e][1]) * words];
+        const auto i0 = static_cast<std::size_t>(edges[e][0]);
+        const auto i1 = static_cast<std::size_t>(edges[e][1]);
+        if (segment_point_distance(v[i0], v[i1], centre) > radius + reach) {
+            continue;
+        }
+        const double* d0 = dist.data() + i0 * nf;
+        const double* d1 = dist.data() + i1 * nf;
+        if (std::min(d0[hint], d1[hint]) > reach) {
+            continue;
+        }
         bool beyond = false;
-        for (std::size_t w = 0; w < words && !beyond; ++w) {
-            beyond = (m0[w] & m1[w]) != 0;
+        for (std::size_t k = 0; k < nf; ++k) {
+            if (std::min(d0[k], d1[k]) > reach) {
+                hint = k;
+                beyond = true;
+                break;
+            }
         }
         if (!beyond) {
             kept.push_back(static_cast<int>(e));
@@ -338,13 +348,15 @@ PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhe
     Vec3 best_m = Vec3::UnitX();
     const std::size_t nva = fa.vertices.size();
     const std::size_t nvb = r.vb.size();
-    r.dist_b.resize(fa.face_normals.size() * nvb);
+    const std::size_t nfa = fa.face_normals.size();
+    const std::size_t nfb = r.nb.size();
+    r.dist_b.resize(nfa * nvb);
     for (std::size_t k = 0; k < fa.face_normals.size(); ++k) {
         const Vec3& n = fa.face_normals[k];
         double sep = std::numeric_limits<double>::infinity();
         for (std::size_t j = 0; j < nvb; ++j) {
             const double dj = n.dot(r.vb[j]) - fa.face_offsets[k];
-            r.dist_b[k * nvb + j] = dj;
+            r.dist_b[j * nfa + k] = dj;
             sep = std::min(sep, dj);
         }
         ++c.iterations;
@@ -354,12 +366,12 @@ PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhe
             c.feature = CommonPlaneFeature::kFaceOfA;
         }
     }
-    r.dist_a.resize(r.nb.size() * nva);
+    r.dist_a.resize(nfb * nva);
     for (std::size_t k = 0; k < r.nb.size() && best <= 0.0; ++k) {
         double sep = std::numeric_limits<double>::infinity();
         for (std::size_t i = 0; i < nva; ++i) {
             const double di = r.nb[k].dot(fa.vertices[i]) - r.ob[k];
-            r.dist_a[k * nva + i] = di;
+            r.dist_a[i * nfb + k] = di;
             sep = std::min(sep, di);
         }
         ++c.iterations;
@@ -373,12 +385,13 @@ PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhe
         // Exact prune of the edge stage. If the deepest plane is an edge-edge one with overlap
         // d* < D = -best, the origin's nearest point on the Minkowski difference lies on the face
         // spanned by the two edges, i.e. points of the two edges are d* apart: each edge passes
-        // within D of the other body. An edge whose two ends lie beyond one face plane of the
-        // other body by more than D is farther than D from that body and cannot carry the
-        // optimum, so it is dropped (slack: 1e-9 of the size against round-off).
+        // within D of the other body. An edge farther than D from the other body's bounding
+        // sphere, or whose two ends lie beyond one face plane of the other body by more than D,
+        // is farther than D from that body and cannot carry the optimum, so it is dropped
+        // (slack: 1e-9 of the size against round-off).
         const double reach = -best + 1e-9 * (fa.radius + fb.radius);
-        keep_edges(fa.edges, r.dist_a, r.nb.size(), nva, reach, r.mask_a, r.edges_a);
-        keep_edges(fb.edges, r.dist_b, fa.face_normals.size(), nvb, reach, r.mask_b, r.edges_b);
+        keep_edges(fa.edges, fa.vertices, r.dist_a, nfb, reach, r.shift, fb.radius, r.edges_a);
+        keep_edges(fb.edges, r.vb, r.dist_b, nfa, reach, Vec3::Zero(), fa.radius, r.edges_b);
         r.pruned = true;
         for (const int ia : r.edges_a) {
             const auto& ea = fa.edges[static_cast<std::size_t>(ia)];
