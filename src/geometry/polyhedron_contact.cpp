@@ -127,6 +127,7 @@ struct Relative {
     bool pruned = false;               // edges_a/edges_b are valid for this pose
 };
 
+/// B's pose and vertices in A's frame (enough for A's face stage, which rejects most near misses).
 void make_relative(const PosedPolyhedron& a, const PosedPolyhedron& b, Relative& r) {
     r.pruned = false;
     const Quat qab = a.q.conjugate() * b.q;
@@ -137,14 +138,23 @@ void make_relative(const PosedPolyhedron& a, const PosedPolyhedron& b, Relative&
     for (std::size_t j = 0; j < fb.vertices.size(); ++j) {
         r.vb[j] = r.rot * fb.vertices[j] + r.shift;
     }
+}
+
+/// B's face planes in A's frame (after make_relative).
+void relative_faces(const PolyhedronFeatures& fb, Relative& r) {
     r.nb.resize(fb.face_normals.size());
     r.ob.resize(fb.face_normals.size());
     for (std::size_t k = 0; k < fb.face_normals.size(); ++k) {
         r.nb[k] = r.rot * fb.face_normals[k];
         r.ob[k] = fb.face_offsets[k] + r.nb[k].dot(r.shift);
     }
+}
+
+/// The Gauss-map arcs of B's kept edges (after relative_faces and the prune).
+void relative_arcs(const PolyhedronFeatures& fb, Relative& r) {
     r.arcs.resize(fb.edges.size());
-    for (std::size_t k = 0; k < fb.edges.size(); ++k) {
+    for (const int e : r.edges_b) {
+        const auto k = static_cast<std::size_t>(e);
         const Vec3 c = -r.nb[static_cast<std::size_t>(fb.edges[k][2])];
         const Vec3 d = -r.nb[static_cast<std::size_t>(fb.edges[k][3])];
         r.arcs[k] = {c, d, d.cross(c)};
@@ -349,7 +359,7 @@ PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhe
     const std::size_t nva = fa.vertices.size();
     const std::size_t nvb = r.vb.size();
     const std::size_t nfa = fa.face_normals.size();
-    const std::size_t nfb = r.nb.size();
+    const std::size_t nfb = fb.face_normals.size();
     r.dist_b.resize(nfa * nvb);
     for (std::size_t k = 0; k < fa.face_normals.size(); ++k) {
         const Vec3& n = fa.face_normals[k];
@@ -365,6 +375,9 @@ PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhe
             best_m = -n;
             c.feature = CommonPlaneFeature::kFaceOfA;
         }
+    }
+    if (best <= 0.0) {
+        relative_faces(fb, r);
     }
     r.dist_a.resize(nfb * nva);
     for (std::size_t k = 0; k < r.nb.size() && best <= 0.0; ++k) {
@@ -393,6 +406,7 @@ PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhe
         keep_edges(fa.edges, fa.vertices, r.dist_a, nfb, reach, r.shift, fb.radius, r.edges_a);
         keep_edges(fb.edges, r.vb, r.dist_b, nfa, reach, Vec3::Zero(), fa.radius, r.edges_b);
         r.pruned = true;
+        relative_arcs(fb, r);
         for (const int ia : r.edges_a) {
             const auto& ea = fa.edges[static_cast<std::size_t>(ia)];
             const Vec3& na0 = fa.face_normals[static_cast<std::size_t>(ea[2])];
@@ -450,6 +464,7 @@ PolyhedronContact contact_patch_along(const PosedPolyhedron& a, const PosedPolyh
                                       const Vec3& m) {
     thread_local Relative r;
     make_relative(a, b, r);
+    relative_faces(*b.shape, r);
     return patch_in_a(a, b, r, a.q.conjugate() * m.normalized());
 }
 
