@@ -232,13 +232,18 @@ constexpr double kTieBand = 0.02;
 void near_support(const geometry::PosedPolyhedron& p, const Vec3& d, double overlap,
                   std::vector<std::pair<Vec3, double>>& out) {
     out.clear();
-    const double top = d.dot(p.support(d));
+    // In the body frame (d . x = d . p.x + d_body . v): one rotation of d instead of one per
+    // vertex; only the vertices in the band are turned to the world frame.
+    const Vec3 db = p.q.conjugate() * d;
+    double top = -std::numeric_limits<double>::infinity();
+    for (const Vec3& v : p.shape->vertices) {
+        top = std::max(top, db.dot(v));
+    }
     const double band = kTieBand * overlap;
     for (const Vec3& v : p.shape->vertices) {
-        const Vec3 x = p.x + p.q * v;
-        const double w = 1.0 - (top - d.dot(x)) / band;
+        const double w = 1.0 - (top - db.dot(v)) / band;
         if (w > 0.0) {
-            out.emplace_back(x, w);
+            out.emplace_back(p.x + p.q * v, w);
         }
     }
 }
@@ -433,8 +438,10 @@ Vec3 wall_point(const geometry::PosedPolyhedron& p, double overlap, const Vec3& 
     const double band = kTieBand * overlap;
     Vec3 sum = Vec3::Zero();
     double wsum = 0.0;
+    const Mat3 rot =
+        p.q.toRotationMatrix(); // one matrix instead of a quaternion product per vertex
     for (const Vec3& v : f.vertices) {
-        const Vec3 x = p.x + p.q * v;
+        const Vec3 x = p.x + rot * v;
         const double w = 1.0 - (overlap - depth(x)) / band;
         if (w > 0.0) {
             sum += w * x;
