@@ -188,12 +188,12 @@ bool is_minkowski_face(const Vec3& a, const Vec3& b, const Vec3& bxa, const Vec3
     return cba * dba < 0.0 && adc * bdc < 0.0 && cba * bdc > 0.0;
 }
 
-/// Distance (m) from the segment p0-p1 to the point c.
-double segment_point_distance(const Vec3& p0, const Vec3& p1, const Vec3& c) {
+/// Squared distance (m^2) from the segment p0-p1 to the point c.
+double segment_point_distance2(const Vec3& p0, const Vec3& p1, const Vec3& c) {
     const Vec3 d = p1 - p0;
     const double dd = d.squaredNorm();
     const double t = dd > 0.0 ? std::clamp((c - p0).dot(d) / dd, 0.0, 1.0) : 0.0;
-    return (p0 + t * d - c).norm();
+    return (p0 + t * d - c).squaredNorm();
 }
 
 /// Edges of a body (vertices `v`; their distances beyond the other body's nf face planes in
@@ -205,11 +205,12 @@ void keep_edges(const std::vector<std::array<int, 4>>& edges, const std::vector<
                 const std::vector<double>& dist, std::size_t nf, double reach, const Vec3& centre,
                 double radius, std::vector<int>& kept) {
     kept.clear();
+    const double far2 = (radius + reach) * (radius + reach);
     std::size_t hint = 0; // the plane that dropped the last edge: it often drops the next too
     for (std::size_t e = 0; e < edges.size(); ++e) {
         const auto i0 = static_cast<std::size_t>(edges[e][0]);
         const auto i1 = static_cast<std::size_t>(edges[e][1]);
-        if (segment_point_distance(v[i0], v[i1], centre) > radius + reach) {
+        if (segment_point_distance2(v[i0], v[i1], centre) > far2) {
             continue;
         }
         const double* d0 = dist.data() + i0 * nf;
