@@ -7,8 +7,10 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <gtest/gtest.h>
 #include <random>
+#include <vector>
 
 namespace g = kiln::geometry;
 using kiln::Mat3;
@@ -209,4 +211,50 @@ TEST(Polyhedron, DegenerateInputIsRefused) {
     std::vector<Vec3> stray = h.vertices;
     stray.push_back(Vec3(5.0, 0.0, 0.0));
     EXPECT_THROW((void)g::make_polyhedron(stray, h.faces, "stray"), kiln::InputError);
+}
+
+TEST(Polyhedron, HullOfAPointSetThatTripsCgalQuickhull) {
+    // Vertices of a random polyhedron of Yade 2023 (polyhedra_utils.polyhedra, 8 mm, seed 13; m),
+    // in Yade's order. Its first three points span a hull face with a fourth point within 1e-18 m
+    // of it: CGAL 5.5's quickhull, started from them, erased one list node twice (CGAL issues
+    // 6543, 8625, 8761; a heap use after free that the sanitizer build of this test reports).
+    // convex_hull starts CGAL from a wide triangle through the body instead.
+    const std::vector<std::array<double, 3>> raw = {
+        {-0.0037925338691577153, 0.0024623643710816648, 0.0041230810810475851},
+        {0.0027564161407388071, -0.0035542779847415728, 0.0026204724562411525},
+        {-0.0025542833513977096, -0.0021756666300861306, 0.0036216055063861517},
+        {-0.0033714743054181896, -0.0044042511619974264, -0.00049629992795993845},
+        {0.0050861578851706096, 0.0012575115311620449, 0.002517643003821058},
+        {-0.0014844048609994941, -0.0030062254392800121, -0.0034908138220036689},
+        {0.0049688854100693736, -0.0012457920729634178, 0.002382410797702007},
+        {0.0049498363566863202, -0.001360872174298347, 0.0023146993088795473},
+        {0.0031225705159359666, -0.0039637810254559442, 0.0020010661835871942},
+        {0.0028131701909979061, -0.0045199146694135228, 0.00094542083539498646},
+        {0.0030579057687336424, 0.004050837502987098, -0.0028039092746570881},
+        {-0.0019115704140087062, 0.0038539519112033272, 0.0038852313588663596},
+        {0.0041912537794731846, 0.0031987719561861641, -0.0018162651753710879},
+        {-0.0055589815797045944, 0.00049896286549538688, -0.002377851208302314},
+        {0.0041574446153093431, -0.0028576016246253237, -0.0010181994480252341},
+        {-0.0024347166376168703, -0.0048578523914548869, -0.0010411978263840985},
+        {0.0036963282757556362, -0.0015440193454149633, -0.0033004888645731911},
+        {0.0039072069650425015, 0.0022910540248760594, -0.0029527592146450341},
+        {-0.005012640393465672, 0.00083107784802747154, -0.0031852172056214094},
+        {0.00061149314341376985, 0.0051051954357097988, -0.0027366640723887714},
+    };
+    std::vector<Vec3> pts;
+    for (const auto& p : raw) {
+        pts.emplace_back(p[0], p[1], p[2]);
+    }
+    const g::Hull h = g::convex_hull(pts, "seed 13");
+    const g::ConvexPolyhedron poly = g::make_polyhedron(h.vertices, h.faces, "seed 13");
+    EXPECT_GT(poly.volume, 0.0);
+    // Every input point lies inside or on the hull (to round-off of the 8 mm size).
+    for (const Vec3& p : pts) {
+        for (const auto& f : h.faces) {
+            const Vec3& a = h.vertices[static_cast<std::size_t>(f[0])];
+            const Vec3 n = (h.vertices[static_cast<std::size_t>(f[1])] - a)
+                               .cross(h.vertices[static_cast<std::size_t>(f[2])] - a);
+            EXPECT_LE(n.normalized().dot(p - a), 1e-15);
+        }
+    }
 }
