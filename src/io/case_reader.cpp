@@ -811,6 +811,8 @@ void read_heat(Section& root, CaseSpec& c, const toml::table& doc) {
     h.gas.porosity = s.real("gas_porosity", 0.4, Range{0.0, 1.0, false, false}, "-");
     h.gas.cutoff = s.real("gas_cutoff", 0.5, positive(), "-");
     h.radiation_cutoff = s.real("radiation_cutoff", 0.5, positive(), "-");
+    h.collision_conduction = s.boolean("collision_conduction", false);
+    c.scene.record_contact_onsets = h.collision_conduction; // the force loop records impacts
     h.field_output = s.boolean("field_output", false);
     if (const toml::node* n = s.take("field_particles")) {
         const toml::array* a = n->as_array();

@@ -5,6 +5,7 @@
 #include "core/error.hpp"
 #include "geometry/shape_metrics.hpp"
 #include "heat/cartesian_grid.hpp"
+#include "heat/collision_conduction.hpp"
 #include "heat/contact_conduction.hpp"
 #include "heat/convection.hpp"
 #include "heat/gas_conduction.hpp"
@@ -199,6 +200,32 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
                     "= 0 or use spheres)",
                     mats[static_cast<std::size_t>(material)].name,
                     sys.spec().shapes[static_cast<std::size_t>(shape)].name, where));
+            }
+        }
+    }
+    if (spec_.collision_conduction) {
+        // Impacts come from the sphere kernel's onset records: bodies (element contacts in
+        // system_bodies.cpp) and mesh walls record none yet.
+        if (!sys.spec().record_contact_onsets) {
+            throw InputError("heat: collision_conduction needs the System to record contact "
+                             "onsets (SceneSpec::record_contact_onsets = true)");
+        }
+        for (const auto& [material, shape, where] : kinds) {
+            if (shape >= 0) {
+                throw InputError(fmt::format(
+                    "heat: collision_conduction with non-spherical particles (shape \"{}\", {}): "
+                    "not yet for bodies (impacts are recorded for spheres only; set "
+                    "collision_conduction = false or use spheres)",
+                    sys.spec().shapes[static_cast<std::size_t>(shape)].name, where));
+            }
+        }
+        for (std::size_t w = 0; w < spec_.mesh_wall_temperature.size(); ++w) {
+            if (!std::isnan(spec_.mesh_wall_temperature[w])) {
+                throw InputError(fmt::format(
+                    "heat: collision_conduction with mesh wall \"{}\" at a temperature: not yet "
+                    "for mesh walls (their impacts are not recorded; set collision_conduction = "
+                    "false or leave the mesh wall adiabatic)",
+                    sys.spec().mesh_walls[w].name));
             }
         }
     }
@@ -418,6 +445,10 @@ double ThermalSystem::contact_temperature(const Record& r, const ContactData& c,
 }
 
 bool ThermalSystem::after_step(const dynamics::System& sys) {
+    if (spec_.collision_conduction) {
+        const std::vector<dynamics::ContactOnset>& e = sys.contact_onsets();
+        onsets_.insert(onsets_.end(), e.begin(), e.end());
+    }
     if (sys.step_count() % spec_.step_multiple != 0) {
         return false;
     }
@@ -523,6 +554,7 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
     }
     add_gas_gaps(sys, g_sum, worst);
     add_radiation(sys, g_sum, worst);
+    add_collisions(sys, g_sum, worst);
     for (std::size_t i = 0; i < p.size(); ++i) {
         if (g_sum[i] > 0.0) {
             const Record& r = by_id_[static_cast<std::size_t>(p.id[i])];
@@ -817,6 +849,106 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
     radiation_pairs_ += pairs;
 }
 
+void ThermalSystem::add_collisions(const dynamics::System& sys, std::vector<double>& g_sum,
+                                   double& worst) {
+    if (onsets_.empty()) {
+        return;
+    }
+    const ParticleStore& p = sys.particles();
+    const auto& mats = sys.spec().materials;
+    std::vector<std::int64_t> index(by_id_.size(), -1); // particle index by id (lag limit)
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        index[static_cast<std::size_t>(p.id[i])] = static_cast<std::int64_t>(i);
+    }
+    const auto record_of = [&](std::int64_t id) {
+        const auto k = static_cast<std::size_t>(id);
+        return k < by_id_.size() && index[k] >= 0 ? by_id_[k] : Record{};
+    };
+    long taken = 0;
+    for (const dynamics::ContactOnset& e : onsets_) {
+        ContactData d;
+        d.a = record_of(e.id_i);
+        if (d.a.slot < 0 || !(e.speed > 0.0)) {
+            continue; // no heat model (or the particle left), or no approach
+        }
+        int mat_j = 0;
+        if (e.wall >= 0) {
+            d.wall = true;
+            d.wall_temperature = spec_.wall_temperature[static_cast<std::size_t>(e.wall)];
+            if (std::isnan(d.wall_temperature)) {
+                continue; // adiabatic wall
+            }
+            mat_j = sys.spec().walls[static_cast<std::size_t>(e.wall)].material;
+        } else {
+            d.b = record_of(e.id_j);
+            if (d.b.slot < 0) {
+                continue;
+            }
+            mat_j = d.b.material;
+        }
+        const auto side = [&](int m) {
+            const MaterialHeat& h = spec_.materials[static_cast<std::size_t>(m)];
+            return heat::ImpactSide{density_[static_cast<std::size_t>(m)], h.specific_heat,
+                                    h.conductivity};
+        };
+        // The impact itself with the real moduli (real_youngs_modulus where given): duration and
+        // contact radius are physical, as the static law's c maps its radius to the real one.
+        const Material& mi = mats[static_cast<std::size_t>(d.a.material)];
+        const Material& mj = mats[static_cast<std::size_t>(mat_j)];
+        const double ei_real =
+            spec_.materials[static_cast<std::size_t>(d.a.material)].real_youngs_modulus;
+        const double ej_real = spec_.materials[static_cast<std::size_t>(mat_j)].real_youngs_modulus;
+        const double e_eff =
+            effective_modulus(ei_real > 0.0 ? ei_real : mi.youngs_modulus, mi.poisson_ratio,
+                              ej_real > 0.0 ? ej_real : mj.youngs_modulus, mj.poisson_ratio);
+        double energy = 0.0; // J into i per kelvin of T_j - T_i
+        double rc = 0.0;
+        try {
+            const double tc = heat::hertz_impact_duration(e.m_eff, e_eff, e.r_eff, e.speed);
+            rc = heat::hertz_impact_radius(e.m_eff, e_eff, e.r_eff, e.speed);
+            energy = heat::impact_heat(side(d.a.material), side(mat_j), tc, rc, 0.0, 1.0);
+        } catch (const InputError& err) {
+            throw RunError(sys.step_count(),
+                           fmt::format("{} (impact of particle {} at step {}, {:.3g} m/s)",
+                                       err.what(), e.id_i, e.step, e.speed));
+        }
+        // Exchanged over this thermal step as a lagged conductance: with one sub-step the heat
+        // moved is E (T_j - T_i) with the temperatures at the start of the step.
+        d.conductance = energy / dt_;
+        // Resolved spheres: the patches under the impact's contact disc, at the normal of the
+        // onset (spheres carry no orientation: world axes = body frame).
+        const Vec3 n(e.normal[0], e.normal[1], e.normal[2]);
+        const auto patches = [&](const Record& r, const Vec3& nb) {
+            const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
+            const Vec3 x = t.radius * nb;
+            std::vector<int> out = heat::contact_patches(*t.grid, x, nb, rc);
+            if (!t.spherical) {
+                widen_to_one_cell(*t.grid, t.capacity, t.full_cell_capacity, x, nb, out);
+            }
+            return out;
+        };
+        if (d.a.templ >= 0) {
+            d.patches_a = patches(d.a, n);
+        }
+        if (!d.wall && d.b.templ >= 0) {
+            d.patches_b = patches(d.b, -n);
+        }
+        const auto ia = static_cast<std::size_t>(index[static_cast<std::size_t>(e.id_i)]);
+        g_sum[ia] += d.conductance;
+        double pair_rate = d.conductance / patch_capacity(d.a, d.patches_a);
+        if (!d.wall) {
+            g_sum[static_cast<std::size_t>(index[static_cast<std::size_t>(e.id_j)])] +=
+                d.conductance;
+            pair_rate += d.conductance / patch_capacity(d.b, d.patches_b);
+        }
+        worst = std::max(worst, pair_rate);
+        data_.push_back(std::move(d));
+        ++taken;
+    }
+    collisions_ += taken;
+    onsets_.clear();
+}
+
 void ThermalSystem::particle_temperatures(const dynamics::System& sys,
                                           ParticleTemperatures& out) const {
     const ParticleStore& p = sys.particles();
@@ -944,6 +1076,7 @@ ThermalState ThermalSystem::save_state() const {
     s.ids = slot_ids_;
     s.external_heat = external_heat_;
     s.counters = counters_;
+    s.onsets = onsets_;
     return s;
 }
 
@@ -963,6 +1096,7 @@ void ThermalSystem::restore_state(const ThermalState& s, const dynamics::System&
     lumped_ = s.lumped;
     external_heat_ = s.external_heat;
     counters_ = s.counters;
+    onsets_ = s.onsets;
 }
 
 void ThermalSystem::set_temperature(std::int64_t id, double t) {
@@ -1039,6 +1173,7 @@ std::string ThermalSystem::summary_json() const {
     j += fmt::format("    \"conducting_contacts\": {},\n", k.contacts);
     j += fmt::format("    \"gas_gap_pairs\": {},\n", gas_pairs_);
     j += fmt::format("    \"radiation_pairs\": {},\n", radiation_pairs_);
+    j += fmt::format("    \"collisions\": {},\n", collisions_);
     j += fmt::format("    \"thermal_energy\": {},\n", num(thermal_energy()));
     j += fmt::format("    \"external_heat\": {}\n", num(external_heat_));
     j += "  }";
