@@ -407,6 +407,35 @@ double ThermalSystem::patch_weight(const Template& t, int patch) const {
     return t.spherical ? face.area : t.capacity[static_cast<std::size_t>(face.cell)];
 }
 
+void ThermalSystem::split_weights(const Template& t, std::span<const double> field,
+                                  const std::vector<int>& patches, double q, double t_other,
+                                  std::vector<double>& w) const {
+    w.resize(patches.size());
+    double total = 0.0;
+    if (!t.spherical) {
+        // Each cell by its capacity times how far it is from the partner's temperature on the
+        // side the heat flows: a receiving cell by C_k max(0, T_other - T_k), a giving one by
+        // C_k max(0, T_k - T_other). With the contact temperature the capacity mean of the same
+        // cells, the drop of cell k's distance to T_other per sub-step is then at most
+        // dt H / sum C_m (<= the lag limit's 0.5) times that distance: no cell crosses T_other,
+        // so a donor cell at the scene's lowest temperature gives nothing (validation 29's dip).
+        const double sign = q > 0.0 ? 1.0 : -1.0;
+        for (std::size_t k = 0; k < patches.size(); ++k) {
+            const auto cell = static_cast<std::size_t>(
+                t.grid->boundary[static_cast<std::size_t>(patches[k])].cell);
+            w[k] = t.capacity[cell] * std::max(0.0, sign * (t_other - field[cell]));
+            total += w[k];
+        }
+    }
+    if (!(total > 0.0)) {
+        // Spherical grids (uniform flux by area: their contact temperature is the undisturbed
+        // one, not a mean of these cells), or no cell on the flowing side (q = 0): as before.
+        for (std::size_t k = 0; k < patches.size(); ++k) {
+            w[k] = patch_weight(t, patches[k]);
+        }
+    }
+}
+
 double ThermalSystem::patch_capacity(const Record& r, const std::vector<int>& patches) const {
     if (r.templ < 0) {
         return lumped_capacity_[static_cast<std::size_t>(r.slot)];
@@ -610,40 +639,49 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
     }
     const double dt_sub = dt_ / substeps;
 
+    std::vector<double> weights; // patch shares of one contact side
     for (int s = 0; s < substeps; ++s) {
         std::fill(face_rate_.begin(), face_rate_.end(), 0.0);
         std::fill(lumped_rate_.begin(), lumped_rate_.end(), 0.0);
         // Lagged contact heat rates from the temperatures at the start of the sub-step; what
         // leaves one body enters the other (the same number with the opposite sign).
-        const auto add = [&](const Record& r, const std::vector<int>& patches, double q) {
+        // `t_other` is the partner's contact temperature (K). Cartesian patches split by
+        // temperature: see split_weights.
+        const auto add = [&](const Record& r, const std::vector<int>& patches, double q,
+                             double t_other) {
             if (r.templ < 0) {
                 lumped_rate_[static_cast<std::size_t>(r.slot)] += q;
                 return;
             }
             const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
+            split_weights(t, pool_.field(r.slot), patches, q, t_other, weights);
             double total = 0.0;
-            for (const int b : patches) {
-                total += patch_weight(t, b);
+            std::size_t largest = 0;
+            for (std::size_t k = 0; k < patches.size(); ++k) {
+                total += weights[k];
+                largest = weights[k] > weights[largest] ? k : largest;
             }
             double* rate = face_rate_.data() + face_offset_[static_cast<std::size_t>(r.slot)];
             double given = 0.0;
-            for (std::size_t k = 0; k + 1 < patches.size(); ++k) {
-                const double part = q * (patch_weight(t, patches[k]) / total);
-                rate[patches[k]] += part;
-                given += part;
+            for (std::size_t k = 0; k < patches.size(); ++k) {
+                if (k != largest) {
+                    const double part = q * (weights[k] / total);
+                    rate[patches[k]] += part;
+                    given += part;
+                }
             }
-            rate[patches.back()] += q - given; // the remainder: the parts sum to q exactly
+            rate[patches[largest]] += q - given; // the remainder: the parts sum to q exactly
         };
         for (const ContactData& d : data_) {
             const double ta = contact_temperature(d.a, d, false);
             const double tb = d.wall ? d.wall_temperature : contact_temperature(d.b, d, true);
             const double q = d.radiative ? d.conductance * (tb * tb * tb * tb - ta * ta * ta * ta)
                                          : d.conductance * (tb - ta); // into i
-            add(d.a, d.patches_a, q);
+            add(d.a, d.patches_a, q, tb);
             if (d.wall) {
                 external_heat_ += q * dt_sub;
             } else {
-                add(d.b, d.patches_b, -q);
+                add(d.b, d.patches_b, -q, ta);
             }
         }
         // Lumped particles: backward Euler with implicit convection (h mean: f(theta) averages

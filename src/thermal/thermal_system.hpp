@@ -158,6 +158,12 @@ class ThermalSystem {
     [[nodiscard]] std::pair<double, double> volume_area(const dynamics::System& sys,
                                                         std::size_t i) const;
     [[nodiscard]] double patch_weight(const Template& t, int patch) const;
+    /// Shares `w` (any scale) of a contact's heat rate `q` (W, into the particle) over its
+    /// `patches` of template `t`, with cell temperatures `field` and the partner's contact
+    /// temperature `t_other` (K): temperature-weighted on Cartesian grids, by area on spherical.
+    void split_weights(const Template& t, std::span<const double> field,
+                       const std::vector<int>& patches, double q, double t_other,
+                       std::vector<double>& w) const;
     [[nodiscard]] double patch_capacity(const Record& r, const std::vector<int>& patches) const;
     [[nodiscard]] double contact_temperature(const Record& r, const ContactData& c,
                                              bool side_j) const;
