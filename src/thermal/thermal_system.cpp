@@ -179,15 +179,28 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
     }
     // Gas-gap conduction is a sphere-pair model (Cheng et al. 1999): refuse heated bodies. The
     // radiation view factor is a sphere estimate: refuse bodies of a material with an emissivity.
+    // With radiation to the ambient they radiate to it only (a warning says so).
+    bool warned_bodies = false;
     for (const auto& [material, shape, where] : kinds) {
         const MaterialHeat& mh = spec_.materials[static_cast<std::size_t>(material)];
         if (shape >= 0 && mh.enabled && mh.emissivity > 0.0) {
-            throw InputError(fmt::format(
-                "heat: material \"{}\" has an emissivity and non-spherical particles (shape "
-                "\"{}\", {}): radiation for non-spherical shapes: not yet (the view factor is a "
-                "sphere estimate; set emissivity = 0 or use spheres)",
-                mats[static_cast<std::size_t>(material)].name,
-                sys.spec().shapes[static_cast<std::size_t>(shape)].name, where));
+            if (std::isnan(spec_.radiation_temperature)) {
+                throw InputError(fmt::format(
+                    "heat: material \"{}\" has an emissivity and non-spherical particles (shape "
+                    "\"{}\", {}): radiation between non-spherical neighbours: not yet (the view "
+                    "factor is a sphere estimate; set emissivity = 0, use spheres, or set "
+                    "radiation_temperature for radiation to the ambient only)",
+                    mats[static_cast<std::size_t>(material)].name,
+                    sys.spec().shapes[static_cast<std::size_t>(shape)].name, where));
+            }
+            if (!warned_bodies) {
+                warned_bodies = true;
+                warnings_.push_back(fmt::format(
+                    "heat: non-spherical particles of material \"{}\" (shape \"{}\") radiate to "
+                    "the ambient only: radiation between neighbours is for spheres",
+                    mats[static_cast<std::size_t>(material)].name,
+                    sys.spec().shapes[static_cast<std::size_t>(shape)].name));
+            }
         }
     }
     if (spec_.gas.conductivity > 0.0) {
@@ -372,6 +385,7 @@ void ThermalSystem::sync(const dynamics::System& sys) {
                                        (body != nullptr ? body->density_factor() : 1.0) *
                                        mh.specific_heat * volume);
             lumped_area_.push_back(area);
+            lumped_emissivity_.push_back(mh.emissivity);
             lumped_rate_.push_back(0.0);
         } else if (used == heat::HeatModel::resolved) {
             r.templ = template_for(sys, i);
@@ -382,6 +396,7 @@ void ThermalSystem::sync(const dynamics::System& sys) {
             face_rate_.resize(face_rate_.size() + g.boundary.size(), 0.0);
             stag_h_.resize(face_rate_.size(), 0.0);
             conv_rate_.resize(face_rate_.size(), 0.0);
+            rad_rate_.resize(face_rate_.size(), 0.0);
         }
         by_id_[static_cast<std::size_t>(id)] = r;
         slot_ids_.push_back(id);
@@ -592,6 +607,29 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
     }
     // Bodies under f(theta): h per face for the current orientation (flow direction turned into
     // the body frame with q^-1); the lagged part (G_b(h f) - G_b(h)) / C_cell joins the lag limit.
+    // Resolved particles radiating to the ambient: the lagged face rate's linearised conductance
+    // A / (1 / (4 eps sigma T^3) + d / k) at the hotter of node and ambient joins the lag limit.
+    const double t_rad = spec_.radiation_temperature;
+    std::vector<char> radiating(static_cast<std::size_t>(pool_.size()), 0);
+    if (!std::isnan(t_rad)) {
+        for (int slot = 0; slot < pool_.size(); ++slot) {
+            const Template& t = *templates_[static_cast<std::size_t>(
+                pool_template_[static_cast<std::size_t>(slot)])];
+            const double eps = spec_.materials[static_cast<std::size_t>(t.material)].emissivity;
+            if (!(eps > 0.0)) {
+                continue;
+            }
+            radiating[static_cast<std::size_t>(slot)] = 1;
+            const std::span<const double> f = pool_.field(slot);
+            for (const heat::BoundaryFace& face : t.grid->boundary) {
+                const auto cell = static_cast<std::size_t>(face.cell);
+                const double tm = std::max(f[cell], t_rad);
+                const double hr = 4.0 * eps * heat::stefan_boltzmann * tm * tm * tm;
+                const double g = face.area / (1.0 / hr + face.distance / t.props.conductivity);
+                worst = std::max(worst, g / t.capacity[cell]);
+            }
+        }
+    }
     std::vector<char> stagnant(static_cast<std::size_t>(pool_.size()), 0);
     for (std::size_t i = 0; i < p.size(); ++i) {
         const Record& r = by_id_[static_cast<std::size_t>(p.id[i])];
@@ -686,16 +724,25 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
         }
         // Lumped particles: backward Euler with implicit convection (h mean: f(theta) averages
         // to 1 over a sphere).
+        // Radiation to the ambient linearised about T^n, eps sigma A (T_a^4 - T^n^4 - 4 T^n^3
+        // (T^(n+1) - T^n)): implicit in the linear part, so never below T_a when cooling
+        // ((T_a^4 + 3 T^4) / (4 T^3) >= T_a), first order in dt like the rest.
         const double h = spec_.heat_transfer_coefficient;
+        const double ta4 = std::isnan(t_rad) ? 0.0 : t_rad * t_rad * t_rad * t_rad;
         for (std::size_t k = 0; k < lumped_.size(); ++k) {
             const double c = lumped_capacity_[k];
             const double a = lumped_area_[k];
             const double t_old = lumped_[k];
-            const double t_new = (c * t_old + dt_sub * (h * a * spec_.ambient_temperature +
-                                                        spec_.flux * a + lumped_rate_[k])) /
-                                 (c + dt_sub * h * a);
+            const double gr =
+                std::isnan(t_rad) ? 0.0 : lumped_emissivity_[k] * heat::stefan_boltzmann * a;
+            const double t3 = t_old * t_old * t_old;
+            const double t_new =
+                (c * t_old + dt_sub * (h * a * spec_.ambient_temperature + spec_.flux * a +
+                                       lumped_rate_[k] + gr * (ta4 + 3.0 * t3 * t_old))) /
+                (c + dt_sub * (h * a + 4.0 * gr * t3));
             external_heat_ +=
-                dt_sub * (h * a * (spec_.ambient_temperature - t_new) + spec_.flux * a);
+                dt_sub * (h * a * (spec_.ambient_temperature - t_new) + spec_.flux * a +
+                          gr * (ta4 + 3.0 * t3 * t_old - 4.0 * t3 * t_new));
             lumped_[k] = t_new;
         }
         // Bodies under f(theta): the lagged convection correction from the field at the start of
@@ -717,6 +764,29 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
                                     std::span<const double>(&t_inf, 1), pool_.field(slot), conv);
             for (std::size_t b = 0; b < nb; ++b) {
                 face_rate_[off + b] += conv[b];
+            }
+        }
+        // Radiation to the ambient of resolved particles: per face eps sigma A (T_a^4 - T_s^4),
+        // T_s from the surface balance with the node at the start of the sub-step (lagged; booked
+        // as external heat below).
+        for (int slot = 0; slot < pool_.size(); ++slot) {
+            if (radiating[static_cast<std::size_t>(slot)] == 0) {
+                continue;
+            }
+            const Template& t = *templates_[static_cast<std::size_t>(
+                pool_template_[static_cast<std::size_t>(slot)])];
+            const double eps = spec_.materials[static_cast<std::size_t>(t.material)].emissivity;
+            const std::size_t off = face_offset_[static_cast<std::size_t>(slot)];
+            const std::span<const double> f = pool_.field(slot);
+            for (std::size_t b = 0; b < t.grid->boundary.size(); ++b) {
+                const heat::BoundaryFace& face = t.grid->boundary[b];
+                const double ts = heat::radiating_surface_temperature(
+                    f[static_cast<std::size_t>(face.cell)], face.distance, t.props.conductivity,
+                    eps, t_rad);
+                const double q =
+                    eps * heat::stefan_boltzmann * face.area * (ta4 - ts * ts * ts * ts);
+                rad_rate_[off + b] = q;
+                face_rate_[off + b] += q;
             }
         }
         // Resolved particles: one backward-Euler solve each with the lagged heat rates. The solves
@@ -755,10 +825,13 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
             const double* rates = face_rate_.data() + face_offset_[static_cast<std::size_t>(slot)];
             double contact_in = 0.0; // lagged contact rates: internal, not external heat
             const bool conv = stagnant[static_cast<std::size_t>(slot)] != 0;
+            const bool rad = radiating[static_cast<std::size_t>(slot)] != 0;
+            const double* rad_rates =
+                rad_rate_.data() + face_offset_[static_cast<std::size_t>(slot)];
             const double* conv_rates =
                 conv_rate_.data() + face_offset_[static_cast<std::size_t>(slot)];
             for (std::size_t b = 0; b < t.grid->boundary.size(); ++b) {
-                contact_in += rates[b] - (conv ? conv_rates[b] : 0.0);
+                contact_in += rates[b] - (conv ? conv_rates[b] : 0.0) - (rad ? rad_rates[b] : 0.0);
             }
             external_heat_ += rep.heat_in - dt_sub * contact_in;
             ++counters_.solves;

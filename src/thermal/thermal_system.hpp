@@ -194,11 +194,12 @@ class ThermalSystem {
     std::vector<Record> by_id_;      // indexed by particle id
     std::vector<double> radius_;     // by particle id (m)
     heat::TemperaturePool pool_;
-    std::vector<int> pool_template_;      // template of each pool slot
-    std::vector<double> lumped_;          // lumped temperatures (K)
-    std::vector<double> lumped_capacity_; // rho c V (J/K)
-    std::vector<double> lumped_area_;     // surface area (m^2)
-    std::vector<std::int64_t> slot_ids_;  // id of each record created, in creation order
+    std::vector<int> pool_template_;        // template of each pool slot
+    std::vector<double> lumped_;            // lumped temperatures (K)
+    std::vector<double> lumped_capacity_;   // rho c V (J/K)
+    std::vector<double> lumped_area_;       // surface area (m^2)
+    std::vector<double> lumped_emissivity_; // emissivity of each lumped slot (-)
+    std::vector<std::int64_t> slot_ids_;    // id of each record created, in creation order
     std::vector<dynamics::ContactRecord> contacts_;
     std::vector<ContactData> data_;
     std::vector<double> face_rate_;        // heat rate per boundary face of every pool slot (W)
@@ -208,6 +209,7 @@ class ThermalSystem {
     // correction to the template's uniform h per sub-step (W).
     std::vector<double> stag_h_;
     std::vector<double> conv_rate_;
+    std::vector<double> rad_rate_;    // lagged radiation to the ambient per face, this sub-step (W)
     std::vector<double> lumped_rate_; // contact heat rate per lumped slot (W)
     double external_heat_ = 0;
     ThermalCounters counters_;
