@@ -299,7 +299,7 @@ inline void keep_or_clear(Vec3& v, bool keep) {
 
 // Work units have a fixed size, so the contacts of a unit, the blocks they are evaluated in and the
 // order of every sum do not depend on the number of threads.
-template <class Law, bool direct, bool bodies>
+template <class Law, bool direct, bool bodies, bool onsets>
 void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, ChunkTotals& t) {
     // Local pointers, as the compiler would otherwise reload each array's address per contact.
     const std::uint32_t* __restrict nb = nl_.partners().data();
@@ -373,6 +373,38 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
             mj[b] = mass[j];
             if (!one_pair) {
                 c.set_pair(b, pairs_.at(p_.material[i], p_.material[j]));
+            }
+        }
+        if constexpr (onsets) {
+            // Contact starts: touching now, apart at the start of the step. The drift was
+            // x^(n+1) = x^n + dt v^(n+1/2) with the velocities gathered here (the closing half
+            // kick comes after the forces), so the start-of-step separation is d - dt (v_i - v_j)
+            // and v^(n+1/2) is the velocity before the impact.
+            for (std::size_t b = 0; b < m; ++b) {
+                const double rsum = ri[b] + rj[b];
+                double before = 0.0;
+                double dist2 = 0.0;
+                double closing = 0.0;
+                for (int q = 0; q < 3; ++q) {
+                    const double e = d[q][b] - dt * c.v[q][b];
+                    before += e * e;
+                    dist2 += d[q][b] * d[q][b];
+                    closing += c.v[q][b] * d[q][b];
+                }
+                if (before >= rsum * rsum) {
+                    const std::uint32_t k = active[a0 + b];
+                    const double dist = std::sqrt(dist2);
+                    ContactOnset e;
+                    e.id_i = p_.id[owner[k]];
+                    e.id_j = p_.id[nb[k]];
+                    e.speed = std::max(0.0, -closing / dist);
+                    e.r_eff = ri[b] * rj[b] / rsum;
+                    e.m_eff = mi[b] * mj[b] / (mi[b] + mj[b]);
+                    for (int q = 0; q < 3; ++q) {
+                        e.normal[q] = -d[q][b] / dist; // d runs from j to i
+                    }
+                    pair_onsets_[begin / pair_chunk_size].push_back(e);
+                }
             }
         }
 #pragma omp simd
@@ -458,7 +490,7 @@ void System::sum_pair_results(std::size_t i) {
 // Wall contacts of the particles [p0, p1): the same blocked law with the wall as body j (at rest,
 // infinite mass). Contacts are collected wall by wall, so each particle receives its wall forces in
 // wall order, and units of particles can run in parallel.
-template <class Law>
+template <class Law, bool onsets>
 void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTotals& t) {
     const std::size_t nw = spec_.walls.size();
     const double dt = spec_.time_step;
@@ -531,6 +563,23 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
                     const std::uint32_t i = *it;
                     const WallContact g = wall_contact(shape, p_.x[i], p_.radius[i]);
                     const bool touch = g.overlap > 0.0;
+                    if constexpr (onsets) {
+                        // Touching now, apart at the start of the step (x - dt v, as for pairs).
+                        if (touch &&
+                            !(wall_contact(shape, p_.x[i] - dt * p_.v[i], p_.radius[i]).overlap >
+                              0.0)) {
+                            ContactOnset e;
+                            e.id_i = p_.id[i];
+                            e.wall = static_cast<std::int32_t>(w);
+                            e.speed = std::max(0.0, -p_.v[i].dot(g.n));
+                            e.r_eff = g.r_eff;
+                            e.m_eff = p_.mass[i];
+                            for (int q = 0; q < 3; ++q) {
+                                e.normal[q] = -g.n[q];
+                            }
+                            wall_onsets_[p0 / particle_unit_size].push_back(e);
+                        }
+                    }
                     geo[n_active] = g;
                     active[n_active] = i;
                     wall_of[n_active] = static_cast<std::uint32_t>(w);
@@ -569,6 +618,19 @@ void System::compute_forces(bool kick_requested) {
     const std::size_t particle_units = (n + particle_unit_size - 1) / particle_unit_size;
     pair_totals_.assign(pair_units, ChunkTotals{});
     particle_totals_.assign(particle_units, ChunkTotals{});
+    // Contact onsets only at a step (a refresh has no start-of-step positions) and for spheres.
+    const bool record = spec_.record_contact_onsets && kick_requested && !has_bodies_;
+    onsets_.clear();
+    if (record) {
+        pair_onsets_.resize(pair_units);
+        wall_onsets_.resize(particle_units);
+        for (auto& v : pair_onsets_) {
+            v.clear();
+        }
+        for (auto& v : wall_onsets_) {
+            v.clear();
+        }
+    }
     if (direct) {
         p_.clear_forces();
     } else {
@@ -593,6 +655,12 @@ void System::compute_forces(bool kick_requested) {
                         } else {
                             pair_chunk<Law, false, true>(law, begin, end, pair_totals_[u]);
                         }
+                    } else if (record) {
+                        if (direct) {
+                            pair_chunk<Law, true, false, true>(law, begin, end, pair_totals_[u]);
+                        } else {
+                            pair_chunk<Law, false, false, true>(law, begin, end, pair_totals_[u]);
+                        }
                     } else if (direct) {
                         pair_chunk<Law, true, false>(law, begin, end, pair_totals_[u]);
                     } else {
@@ -609,7 +677,11 @@ void System::compute_forces(bool kick_requested) {
                             sum_pair_results(i);
                         }
                     }
-                    wall_unit(law, p0, p1, particle_totals_[u]);
+                    if (record) {
+                        wall_unit<Law, true>(law, p0, p1, particle_totals_[u]);
+                    } else {
+                        wall_unit(law, p0, p1, particle_totals_[u]);
+                    }
                     if (kick) {
                         half_kick(p0, p1);
                     }
@@ -617,6 +689,17 @@ void System::compute_forces(bool kick_requested) {
             }
         },
         spec_.contact.law);
+
+    if (record) {
+        for (const auto* part : {&pair_onsets_, &wall_onsets_}) {
+            for (const auto& v : *part) {
+                onsets_.insert(onsets_.end(), v.begin(), v.end());
+            }
+        }
+        for (ContactOnset& e : onsets_) {
+            e.step = step_ + 1; // the step counter advances after the forces
+        }
+    }
 
     // Bodies: element contacts in a fixed serial order, then the kick of every particle.
     ChunkTotals body_pairs;

@@ -52,6 +52,20 @@ struct ContactRecord {
     double r_eff = 0;            ///< effective radius of curvature R* (m)
 };
 
+/// The start of a contact found by the force loop of one step (recorded only when
+/// SceneSpec::record_contact_onsets is set and the scene has no bodies): the pair touches at the
+/// end of the step and did not at its start. For the heat coupling (collision conduction).
+struct ContactOnset {
+    std::int64_t id_i = 0;  ///< particle id of i
+    std::int64_t id_j = -1; ///< particle id of the partner; -1 for a wall
+    std::int32_t wall = -1; ///< analytic wall index (SceneSpec::walls) or -1 for a particle pair
+    std::int64_t step = 0;  ///< step count at the end of the step that found it (-)
+    double speed = 0;       ///< normal approach speed before the impact (m/s), >= 0
+    double r_eff = 0;       ///< effective radius of curvature R* (m)
+    double m_eff = 0;       ///< effective mass m* (kg); the particle's mass against a wall
+    double normal[3] = {0, 0, 1}; ///< unit normal from i towards its partner (world)
+};
+
 /// Everything that evolves during a run: enough to continue it exactly.
 struct SystemState {
     ParticleStore particles;
@@ -116,6 +130,12 @@ class System {
     /// cleared first.
     void collect_contacts(std::vector<ContactRecord>& out) const;
 
+    /// Contacts that started during the last step() (sphere-sphere in neighbour-list chunk order,
+    /// then sphere-wall in particle-unit and wall order); empty unless
+    /// SceneSpec::record_contact_onsets is set and the scene has no bodies. Overwritten by the
+    /// next step: a consumer takes them after every step.
+    [[nodiscard]] const std::vector<ContactOnset>& contact_onsets() const { return onsets_; }
+
     /// Copies out the full evolving state (checkpoint).
     [[nodiscard]] SystemState save_state() const;
     /// Replaces the evolving state with a saved one (restart); the run continues bit for bit.
@@ -155,10 +175,10 @@ class System {
     void index_bodies();
     void check_time_step();
     void compute_forces(bool kick_requested = false);
-    template <class Law, bool direct, bool bodies>
+    template <class Law, bool direct, bool bodies, bool onsets = false>
     void pair_chunk(const Law& law, std::size_t begin, std::size_t end, ChunkTotals& t);
     void sum_pair_results(std::size_t i);
-    template <class Law>
+    template <class Law, bool onsets = false>
     void wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTotals& t);
     void half_kick(std::size_t p0, std::size_t p1);
     void rebuild_neighbours();
@@ -201,6 +221,10 @@ class System {
     // Polyhedron features per template (empty for other shapes), built once in the constructor.
     std::vector<geometry::PolyhedronFeatures> poly_features_;
     std::vector<geometry::MeshContact> mesh_buf_; // scratch of mesh-wall queries
+    // Contact onsets (SceneSpec::record_contact_onsets): per pair chunk and per particle unit
+    // while the force loop runs, then joined in that fixed order into onsets_.
+    std::vector<std::vector<ContactOnset>> pair_onsets_, wall_onsets_;
+    std::vector<ContactOnset> onsets_;
     /// True when contacts go through body_forces (bodies or mesh walls present).
     [[nodiscard]] bool generic_contacts() const { return has_bodies_ || !spec_.mesh_walls.empty(); }
 };

@@ -24,6 +24,15 @@ double hertz_impact_duration(double m_eff, double e_eff, double r_eff, double sp
     return 2.94 * std::pow(15.0 * m_eff / (16.0 * e_eff), 0.4) * std::pow(r_eff * speed, -0.2);
 }
 
+double hertz_impact_radius(double m_eff, double e_eff, double r_eff, double speed) {
+    if (!(m_eff > 0.0) || !(e_eff > 0.0) || !(r_eff > 0.0) || !(speed > 0.0)) {
+        throw InputError("heat: the impact radius needs m*, E*, R* and the speed > 0");
+    }
+    const double delta_max =
+        std::pow(15.0 * m_eff * speed * speed / (16.0 * e_eff * std::sqrt(r_eff)), 0.4);
+    return std::sqrt(r_eff * delta_max);
+}
+
 double impact_correction(const ImpactSide& i, const ImpactSide& j, double t_c, double r_c) {
     check_side(i);
     check_side(j);

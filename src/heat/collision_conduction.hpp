@@ -20,9 +20,9 @@
 // symmetric and conservative; equal materials give the seed's c' exactly.
 // Switching rule (seed L2507): when t_c < the contact duration t_d of the simulation, the impact
 // heat is exchanged during t_c and the static law (contact_conduction.hpp) for the remaining
-// t_d - t_c; otherwise only the impact heat (collision_contact_heat). The run loop does not use
-// this yet: thermal steps sample contacts every step_multiple mechanical steps and see neither the
-// onset nor the impact speed of a collision shorter than that.
+// t_d - t_c; otherwise only the impact heat (collision_contact_heat). In the run loop
+// (thermal::ThermalSystem, `[heat] collision_conduction`) every contact onset recorded by the
+// force loop exchanges impact_heat once, lagged; the static law acts on sampled contacts as before.
 
 namespace kiln::heat {
 
@@ -38,6 +38,11 @@ struct ImpactSide {
 /// effective radius `r_eff` (m) and normal approach speed `speed` (m/s). Throws InputError for
 /// non-positive arguments.
 [[nodiscard]] double hertz_impact_duration(double m_eff, double e_eff, double r_eff, double speed);
+
+/// Largest Hertz contact radius of the same impact, r_c = sqrt(R* delta_max) (m), with
+/// delta_max = (15 m* v^2 / (16 E* sqrt(R*)))^(2/5) (Johnson 1985, §11.1; t_c = 2.94 delta_max /
+/// v). Same arguments and errors as hertz_impact_duration.
+[[nodiscard]] double hertz_impact_radius(double m_eff, double e_eff, double r_eff, double speed);
 
 /// Zhou et al.'s factor c' (-) for side i against side j, impact duration `t_c` (s) and maximum
 /// contact radius `r_c` (m), with Fo = alpha_i t_c / r_c^2 (Inv. VII eq. 18-21, ordered as

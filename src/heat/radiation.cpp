@@ -43,4 +43,27 @@ double radiative_conductance_bound(double coefficient, double t_i, double t_j) {
     return 4.0 * coefficient * t * t * t;
 }
 
+double radiating_surface_temperature(double t_node, double distance, double conductivity,
+                                     double emissivity, double t_ambient) {
+    if (!(distance > 0.0) || emissivity == 0.0) {
+        return t_node;
+    }
+    const double g = conductivity / distance; // W/(m^2 K)
+    const double es = emissivity * stefan_boltzmann;
+    const double a4 = t_ambient * t_ambient * t_ambient * t_ambient;
+    // f(T) = g (T - T_node) + es (T^4 - T_amb^4) is increasing and convex for T > 0: Newton from
+    // T_node reaches the root monotonically after at most one step past it.
+    double t = t_node;
+    for (int it = 0; it < 100; ++it) {
+        const double t3 = t * t * t;
+        const double f = g * (t - t_node) + es * (t3 * t - a4);
+        const double step = f / (g + 4.0 * es * t3);
+        t -= step;
+        if (std::abs(step) <= 1e-14 * std::abs(t)) {
+            break;
+        }
+    }
+    return t;
+}
+
 } // namespace kiln::heat

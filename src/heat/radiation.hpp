@@ -39,4 +39,13 @@ inline constexpr double stefan_boltzmann = 5.670374419e-8;
 /// d Q / d T for the lag limit.
 [[nodiscard]] double radiative_conductance_bound(double coefficient, double t_i, double t_j);
 
+/// Surface temperature T_s (K) of a grey surface of emissivity `emissivity` radiating to a black
+/// enclosure at `t_ambient` (K), fed by conduction from a node at `t_node` (K) through `distance`
+/// (m) of conductivity `conductivity` (W/(m K)): the root of the surface balance
+/// (k / d) (T_node - T_s) = eps sigma (T_s^4 - T_amb^4), by Newton (the left side is linear and the
+/// right convex and increasing, so the root is unique; relative 1e-14). `distance` 0 gives T_node.
+[[nodiscard]] double radiating_surface_temperature(double t_node, double distance,
+                                                   double conductivity, double emissivity,
+                                                   double t_ambient);
+
 } // namespace kiln::heat

@@ -811,6 +811,11 @@ void read_heat(Section& root, CaseSpec& c, const toml::table& doc) {
     h.gas.porosity = s.real("gas_porosity", 0.4, Range{0.0, 1.0, false, false}, "-");
     h.gas.cutoff = s.real("gas_cutoff", 0.5, positive(), "-");
     h.radiation_cutoff = s.real("radiation_cutoff", 0.5, positive(), "-");
+    if (s.has("radiation_temperature")) {
+        h.radiation_temperature = s.real("radiation_temperature", std::nullopt, positive(), "K");
+    }
+    h.collision_conduction = s.boolean("collision_conduction", false);
+    c.scene.record_contact_onsets = h.collision_conduction; // the force loop records impacts
     h.field_output = s.boolean("field_output", false);
     if (const toml::node* n = s.take("field_particles")) {
         const toml::array* a = n->as_array();
@@ -829,7 +834,7 @@ void read_heat(Section& root, CaseSpec& c, const toml::table& doc) {
         }
         out_t.insert_or_assign("field_particles", arr);
     }
-    s.finish({"flow_direction", "field_particles"});
+    s.finish({"flow_direction", "field_particles", "radiation_temperature"});
     root.out().insert_or_assign("heat", std::move(out_t));
 }
 

@@ -147,6 +147,9 @@ struct BodyContactArrays {
 /// Tag of the optional heat section after the mechanical state.
 constexpr char heat_magic[8] = {'K', 'I', 'L', 'N', 'H', 'E', 'A', 'T'};
 
+/// Tag of the optional list of pending contact onsets after the heat section.
+constexpr char onset_magic[8] = {'K', 'I', 'L', 'N', 'O', 'N', 'S', 'T'};
+
 template <class IO, class Heat> void heat_fields(IO& io, Heat& h) {
     io.vec(h.fields);
     io.vec(h.lumped);
@@ -181,6 +184,12 @@ std::optional<thermal::ThermalState> read_checkpoint_heat(const std::filesystem:
     }
     thermal::ThermalState t;
     heat_fields(in, t);
+    // Optional: contact onsets not yet exchanged (collision conduction).
+    char o[sizeof onset_magic] = {};
+    f.read(o, sizeof o);
+    if (f && std::memcmp(o, onset_magic, sizeof onset_magic) == 0) {
+        in.vec(t.onsets);
+    }
     return t;
 }
 
@@ -210,6 +219,11 @@ void write_checkpoint(const std::filesystem::path& file, const dynamics::SystemS
             f.write(heat_magic, sizeof heat_magic);
             thermal::ThermalState copy = *heat;
             heat_fields(out, copy);
+            if (!copy.onsets.empty()) {
+                static_assert(std::is_trivially_copyable_v<dynamics::ContactOnset>);
+                f.write(onset_magic, sizeof onset_magic);
+                out.vec(copy.onsets);
+            }
         }
         if (!f) {
             throw InputError(tmp.string(), 0, "", "writing the checkpoint failed (disk full?)");

@@ -56,6 +56,14 @@ struct HeatSpec {
     int max_substeps = 1024; ///< most sub-steps per thermal step allowed by the lag limit (-)
     /// Gas in the gaps between spheres (Cheng et al. 1999); conductivity 0 = none.
     heat::GasGap gas;
+    /// Collision conduction (Sun & Chen 1988 with Zhou et al.'s c'): every contact onset of a
+    /// sphere pair or a sphere and a wall at a temperature exchanges the impact heat once. Needs
+    /// SceneSpec::record_contact_onsets; not yet for bodies or mesh walls (refused).
+    bool collision_conduction = false;
+    /// Temperature of the black enclosure every heated surface with an emissivity radiates to:
+    /// q = eps sigma (T_s^4 - T^4) per surface cell (resolved) or particle (lumped), any shape
+    /// (K); NaN = no radiation to the ambient.
+    double radiation_temperature = std::numeric_limits<double>::quiet_NaN();
     /// Largest H/R (H half the surface gap) at which neighbouring spheres exchange radiation (-).
     double radiation_cutoff = 0.5;
     std::vector<MaterialHeat> materials; ///< one per material of the scene, same order

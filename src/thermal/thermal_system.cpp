@@ -5,6 +5,7 @@
 #include "core/error.hpp"
 #include "geometry/shape_metrics.hpp"
 #include "heat/cartesian_grid.hpp"
+#include "heat/collision_conduction.hpp"
 #include "heat/contact_conduction.hpp"
 #include "heat/convection.hpp"
 #include "heat/gas_conduction.hpp"
@@ -178,15 +179,28 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
     }
     // Gas-gap conduction is a sphere-pair model (Cheng et al. 1999): refuse heated bodies. The
     // radiation view factor is a sphere estimate: refuse bodies of a material with an emissivity.
+    // With radiation to the ambient they radiate to it only (a warning says so).
+    bool warned_bodies = false;
     for (const auto& [material, shape, where] : kinds) {
         const MaterialHeat& mh = spec_.materials[static_cast<std::size_t>(material)];
         if (shape >= 0 && mh.enabled && mh.emissivity > 0.0) {
-            throw InputError(fmt::format(
-                "heat: material \"{}\" has an emissivity and non-spherical particles (shape "
-                "\"{}\", {}): radiation for non-spherical shapes: not yet (the view factor is a "
-                "sphere estimate; set emissivity = 0 or use spheres)",
-                mats[static_cast<std::size_t>(material)].name,
-                sys.spec().shapes[static_cast<std::size_t>(shape)].name, where));
+            if (std::isnan(spec_.radiation_temperature)) {
+                throw InputError(fmt::format(
+                    "heat: material \"{}\" has an emissivity and non-spherical particles (shape "
+                    "\"{}\", {}): radiation between non-spherical neighbours: not yet (the view "
+                    "factor is a sphere estimate; set emissivity = 0, use spheres, or set "
+                    "radiation_temperature for radiation to the ambient only)",
+                    mats[static_cast<std::size_t>(material)].name,
+                    sys.spec().shapes[static_cast<std::size_t>(shape)].name, where));
+            }
+            if (!warned_bodies) {
+                warned_bodies = true;
+                warnings_.push_back(fmt::format(
+                    "heat: non-spherical particles of material \"{}\" (shape \"{}\") radiate to "
+                    "the ambient only: radiation between neighbours is for spheres",
+                    mats[static_cast<std::size_t>(material)].name,
+                    sys.spec().shapes[static_cast<std::size_t>(shape)].name));
+            }
         }
     }
     if (spec_.gas.conductivity > 0.0) {
@@ -199,6 +213,32 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
                     "= 0 or use spheres)",
                     mats[static_cast<std::size_t>(material)].name,
                     sys.spec().shapes[static_cast<std::size_t>(shape)].name, where));
+            }
+        }
+    }
+    if (spec_.collision_conduction) {
+        // Impacts come from the sphere kernel's onset records: bodies (element contacts in
+        // system_bodies.cpp) and mesh walls record none yet.
+        if (!sys.spec().record_contact_onsets) {
+            throw InputError("heat: collision_conduction needs the System to record contact "
+                             "onsets (SceneSpec::record_contact_onsets = true)");
+        }
+        for (const auto& [material, shape, where] : kinds) {
+            if (shape >= 0) {
+                throw InputError(fmt::format(
+                    "heat: collision_conduction with non-spherical particles (shape \"{}\", {}): "
+                    "not yet for bodies (impacts are recorded for spheres only; set "
+                    "collision_conduction = false or use spheres)",
+                    sys.spec().shapes[static_cast<std::size_t>(shape)].name, where));
+            }
+        }
+        for (std::size_t w = 0; w < spec_.mesh_wall_temperature.size(); ++w) {
+            if (!std::isnan(spec_.mesh_wall_temperature[w])) {
+                throw InputError(fmt::format(
+                    "heat: collision_conduction with mesh wall \"{}\" at a temperature: not yet "
+                    "for mesh walls (their impacts are not recorded; set collision_conduction = "
+                    "false or leave the mesh wall adiabatic)",
+                    sys.spec().mesh_walls[w].name));
             }
         }
     }
@@ -345,6 +385,7 @@ void ThermalSystem::sync(const dynamics::System& sys) {
                                        (body != nullptr ? body->density_factor() : 1.0) *
                                        mh.specific_heat * volume);
             lumped_area_.push_back(area);
+            lumped_emissivity_.push_back(mh.emissivity);
             lumped_rate_.push_back(0.0);
         } else if (used == heat::HeatModel::resolved) {
             r.templ = template_for(sys, i);
@@ -355,6 +396,7 @@ void ThermalSystem::sync(const dynamics::System& sys) {
             face_rate_.resize(face_rate_.size() + g.boundary.size(), 0.0);
             stag_h_.resize(face_rate_.size(), 0.0);
             conv_rate_.resize(face_rate_.size(), 0.0);
+            rad_rate_.resize(face_rate_.size(), 0.0);
         }
         by_id_[static_cast<std::size_t>(id)] = r;
         slot_ids_.push_back(id);
@@ -378,6 +420,35 @@ double ThermalSystem::patch_weight(const Template& t, int patch) const {
     // sliver cut cell (volume fraction ~1e-4, but a full share of the surface) would receive heat
     // it cannot hold within one lagged step (found by validation 26).
     return t.spherical ? face.area : t.capacity[static_cast<std::size_t>(face.cell)];
+}
+
+void ThermalSystem::split_weights(const Template& t, std::span<const double> field,
+                                  const std::vector<int>& patches, double q, double t_other,
+                                  std::vector<double>& w) const {
+    w.resize(patches.size());
+    double total = 0.0;
+    if (!t.spherical) {
+        // Each cell by its capacity times how far it is from the partner's temperature on the
+        // side the heat flows: a receiving cell by C_k max(0, T_other - T_k), a giving one by
+        // C_k max(0, T_k - T_other). With the contact temperature the capacity mean of the same
+        // cells, the drop of cell k's distance to T_other per sub-step is then at most
+        // dt H / sum C_m (<= the lag limit's 0.5) times that distance: no cell crosses T_other,
+        // so a donor cell at the scene's lowest temperature gives nothing (validation 29's dip).
+        const double sign = q > 0.0 ? 1.0 : -1.0;
+        for (std::size_t k = 0; k < patches.size(); ++k) {
+            const auto cell = static_cast<std::size_t>(
+                t.grid->boundary[static_cast<std::size_t>(patches[k])].cell);
+            w[k] = t.capacity[cell] * std::max(0.0, sign * (t_other - field[cell]));
+            total += w[k];
+        }
+    }
+    if (!(total > 0.0)) {
+        // Spherical grids (uniform flux by area: their contact temperature is the undisturbed
+        // one, not a mean of these cells), or no cell on the flowing side (q = 0): as before.
+        for (std::size_t k = 0; k < patches.size(); ++k) {
+            w[k] = patch_weight(t, patches[k]);
+        }
+    }
 }
 
 double ThermalSystem::patch_capacity(const Record& r, const std::vector<int>& patches) const {
@@ -418,6 +489,10 @@ double ThermalSystem::contact_temperature(const Record& r, const ContactData& c,
 }
 
 bool ThermalSystem::after_step(const dynamics::System& sys) {
+    if (spec_.collision_conduction) {
+        const std::vector<dynamics::ContactOnset>& e = sys.contact_onsets();
+        onsets_.insert(onsets_.end(), e.begin(), e.end());
+    }
     if (sys.step_count() % spec_.step_multiple != 0) {
         return false;
     }
@@ -523,6 +598,7 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
     }
     add_gas_gaps(sys, g_sum, worst);
     add_radiation(sys, g_sum, worst);
+    add_collisions(sys, g_sum, worst);
     for (std::size_t i = 0; i < p.size(); ++i) {
         if (g_sum[i] > 0.0) {
             const Record& r = by_id_[static_cast<std::size_t>(p.id[i])];
@@ -531,6 +607,29 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
     }
     // Bodies under f(theta): h per face for the current orientation (flow direction turned into
     // the body frame with q^-1); the lagged part (G_b(h f) - G_b(h)) / C_cell joins the lag limit.
+    // Resolved particles radiating to the ambient: the lagged face rate's linearised conductance
+    // A / (1 / (4 eps sigma T^3) + d / k) at the hotter of node and ambient joins the lag limit.
+    const double t_rad = spec_.radiation_temperature;
+    std::vector<char> radiating(static_cast<std::size_t>(pool_.size()), 0);
+    if (!std::isnan(t_rad)) {
+        for (int slot = 0; slot < pool_.size(); ++slot) {
+            const Template& t = *templates_[static_cast<std::size_t>(
+                pool_template_[static_cast<std::size_t>(slot)])];
+            const double eps = spec_.materials[static_cast<std::size_t>(t.material)].emissivity;
+            if (!(eps > 0.0)) {
+                continue;
+            }
+            radiating[static_cast<std::size_t>(slot)] = 1;
+            const std::span<const double> f = pool_.field(slot);
+            for (const heat::BoundaryFace& face : t.grid->boundary) {
+                const auto cell = static_cast<std::size_t>(face.cell);
+                const double tm = std::max(f[cell], t_rad);
+                const double hr = 4.0 * eps * heat::stefan_boltzmann * tm * tm * tm;
+                const double g = face.area / (1.0 / hr + face.distance / t.props.conductivity);
+                worst = std::max(worst, g / t.capacity[cell]);
+            }
+        }
+    }
     std::vector<char> stagnant(static_cast<std::size_t>(pool_.size()), 0);
     for (std::size_t i = 0; i < p.size(); ++i) {
         const Record& r = by_id_[static_cast<std::size_t>(p.id[i])];
@@ -578,54 +677,72 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
     }
     const double dt_sub = dt_ / substeps;
 
+    std::vector<double> weights; // patch shares of one contact side
     for (int s = 0; s < substeps; ++s) {
         std::fill(face_rate_.begin(), face_rate_.end(), 0.0);
         std::fill(lumped_rate_.begin(), lumped_rate_.end(), 0.0);
         // Lagged contact heat rates from the temperatures at the start of the sub-step; what
         // leaves one body enters the other (the same number with the opposite sign).
-        const auto add = [&](const Record& r, const std::vector<int>& patches, double q) {
+        // `t_other` is the partner's contact temperature (K). Cartesian patches split by
+        // temperature: see split_weights.
+        const auto add = [&](const Record& r, const std::vector<int>& patches, double q,
+                             double t_other) {
             if (r.templ < 0) {
                 lumped_rate_[static_cast<std::size_t>(r.slot)] += q;
                 return;
             }
             const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
+            split_weights(t, pool_.field(r.slot), patches, q, t_other, weights);
             double total = 0.0;
-            for (const int b : patches) {
-                total += patch_weight(t, b);
+            std::size_t largest = 0;
+            for (std::size_t k = 0; k < patches.size(); ++k) {
+                total += weights[k];
+                largest = weights[k] > weights[largest] ? k : largest;
             }
             double* rate = face_rate_.data() + face_offset_[static_cast<std::size_t>(r.slot)];
             double given = 0.0;
-            for (std::size_t k = 0; k + 1 < patches.size(); ++k) {
-                const double part = q * (patch_weight(t, patches[k]) / total);
-                rate[patches[k]] += part;
-                given += part;
+            for (std::size_t k = 0; k < patches.size(); ++k) {
+                if (k != largest) {
+                    const double part = q * (weights[k] / total);
+                    rate[patches[k]] += part;
+                    given += part;
+                }
             }
-            rate[patches.back()] += q - given; // the remainder: the parts sum to q exactly
+            rate[patches[largest]] += q - given; // the remainder: the parts sum to q exactly
         };
         for (const ContactData& d : data_) {
             const double ta = contact_temperature(d.a, d, false);
             const double tb = d.wall ? d.wall_temperature : contact_temperature(d.b, d, true);
             const double q = d.radiative ? d.conductance * (tb * tb * tb * tb - ta * ta * ta * ta)
                                          : d.conductance * (tb - ta); // into i
-            add(d.a, d.patches_a, q);
+            add(d.a, d.patches_a, q, tb);
             if (d.wall) {
                 external_heat_ += q * dt_sub;
             } else {
-                add(d.b, d.patches_b, -q);
+                add(d.b, d.patches_b, -q, ta);
             }
         }
         // Lumped particles: backward Euler with implicit convection (h mean: f(theta) averages
         // to 1 over a sphere).
+        // Radiation to the ambient linearised about T^n, eps sigma A (T_a^4 - T^n^4 - 4 T^n^3
+        // (T^(n+1) - T^n)): implicit in the linear part, so never below T_a when cooling
+        // ((T_a^4 + 3 T^4) / (4 T^3) >= T_a), first order in dt like the rest.
         const double h = spec_.heat_transfer_coefficient;
+        const double ta4 = std::isnan(t_rad) ? 0.0 : t_rad * t_rad * t_rad * t_rad;
         for (std::size_t k = 0; k < lumped_.size(); ++k) {
             const double c = lumped_capacity_[k];
             const double a = lumped_area_[k];
             const double t_old = lumped_[k];
-            const double t_new = (c * t_old + dt_sub * (h * a * spec_.ambient_temperature +
-                                                        spec_.flux * a + lumped_rate_[k])) /
-                                 (c + dt_sub * h * a);
+            const double gr =
+                std::isnan(t_rad) ? 0.0 : lumped_emissivity_[k] * heat::stefan_boltzmann * a;
+            const double t3 = t_old * t_old * t_old;
+            const double t_new =
+                (c * t_old + dt_sub * (h * a * spec_.ambient_temperature + spec_.flux * a +
+                                       lumped_rate_[k] + gr * (ta4 + 3.0 * t3 * t_old))) /
+                (c + dt_sub * (h * a + 4.0 * gr * t3));
             external_heat_ +=
-                dt_sub * (h * a * (spec_.ambient_temperature - t_new) + spec_.flux * a);
+                dt_sub * (h * a * (spec_.ambient_temperature - t_new) + spec_.flux * a +
+                          gr * (ta4 + 3.0 * t3 * t_old - 4.0 * t3 * t_new));
             lumped_[k] = t_new;
         }
         // Bodies under f(theta): the lagged convection correction from the field at the start of
@@ -647,6 +764,29 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
                                     std::span<const double>(&t_inf, 1), pool_.field(slot), conv);
             for (std::size_t b = 0; b < nb; ++b) {
                 face_rate_[off + b] += conv[b];
+            }
+        }
+        // Radiation to the ambient of resolved particles: per face eps sigma A (T_a^4 - T_s^4),
+        // T_s from the surface balance with the node at the start of the sub-step (lagged; booked
+        // as external heat below).
+        for (int slot = 0; slot < pool_.size(); ++slot) {
+            if (radiating[static_cast<std::size_t>(slot)] == 0) {
+                continue;
+            }
+            const Template& t = *templates_[static_cast<std::size_t>(
+                pool_template_[static_cast<std::size_t>(slot)])];
+            const double eps = spec_.materials[static_cast<std::size_t>(t.material)].emissivity;
+            const std::size_t off = face_offset_[static_cast<std::size_t>(slot)];
+            const std::span<const double> f = pool_.field(slot);
+            for (std::size_t b = 0; b < t.grid->boundary.size(); ++b) {
+                const heat::BoundaryFace& face = t.grid->boundary[b];
+                const double ts = heat::radiating_surface_temperature(
+                    f[static_cast<std::size_t>(face.cell)], face.distance, t.props.conductivity,
+                    eps, t_rad);
+                const double q =
+                    eps * heat::stefan_boltzmann * face.area * (ta4 - ts * ts * ts * ts);
+                rad_rate_[off + b] = q;
+                face_rate_[off + b] += q;
             }
         }
         // Resolved particles: one backward-Euler solve each with the lagged heat rates. The solves
@@ -685,10 +825,13 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
             const double* rates = face_rate_.data() + face_offset_[static_cast<std::size_t>(slot)];
             double contact_in = 0.0; // lagged contact rates: internal, not external heat
             const bool conv = stagnant[static_cast<std::size_t>(slot)] != 0;
+            const bool rad = radiating[static_cast<std::size_t>(slot)] != 0;
+            const double* rad_rates =
+                rad_rate_.data() + face_offset_[static_cast<std::size_t>(slot)];
             const double* conv_rates =
                 conv_rate_.data() + face_offset_[static_cast<std::size_t>(slot)];
             for (std::size_t b = 0; b < t.grid->boundary.size(); ++b) {
-                contact_in += rates[b] - (conv ? conv_rates[b] : 0.0);
+                contact_in += rates[b] - (conv ? conv_rates[b] : 0.0) - (rad ? rad_rates[b] : 0.0);
             }
             external_heat_ += rep.heat_in - dt_sub * contact_in;
             ++counters_.solves;
@@ -815,6 +958,106 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
         ++pairs;
     }
     radiation_pairs_ += pairs;
+}
+
+void ThermalSystem::add_collisions(const dynamics::System& sys, std::vector<double>& g_sum,
+                                   double& worst) {
+    if (onsets_.empty()) {
+        return;
+    }
+    const ParticleStore& p = sys.particles();
+    const auto& mats = sys.spec().materials;
+    std::vector<std::int64_t> index(by_id_.size(), -1); // particle index by id (lag limit)
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        index[static_cast<std::size_t>(p.id[i])] = static_cast<std::int64_t>(i);
+    }
+    const auto record_of = [&](std::int64_t id) {
+        const auto k = static_cast<std::size_t>(id);
+        return k < by_id_.size() && index[k] >= 0 ? by_id_[k] : Record{};
+    };
+    long taken = 0;
+    for (const dynamics::ContactOnset& e : onsets_) {
+        ContactData d;
+        d.a = record_of(e.id_i);
+        if (d.a.slot < 0 || !(e.speed > 0.0)) {
+            continue; // no heat model (or the particle left), or no approach
+        }
+        int mat_j = 0;
+        if (e.wall >= 0) {
+            d.wall = true;
+            d.wall_temperature = spec_.wall_temperature[static_cast<std::size_t>(e.wall)];
+            if (std::isnan(d.wall_temperature)) {
+                continue; // adiabatic wall
+            }
+            mat_j = sys.spec().walls[static_cast<std::size_t>(e.wall)].material;
+        } else {
+            d.b = record_of(e.id_j);
+            if (d.b.slot < 0) {
+                continue;
+            }
+            mat_j = d.b.material;
+        }
+        const auto side = [&](int m) {
+            const MaterialHeat& h = spec_.materials[static_cast<std::size_t>(m)];
+            return heat::ImpactSide{density_[static_cast<std::size_t>(m)], h.specific_heat,
+                                    h.conductivity};
+        };
+        // The impact itself with the real moduli (real_youngs_modulus where given): duration and
+        // contact radius are physical, as the static law's c maps its radius to the real one.
+        const Material& mi = mats[static_cast<std::size_t>(d.a.material)];
+        const Material& mj = mats[static_cast<std::size_t>(mat_j)];
+        const double ei_real =
+            spec_.materials[static_cast<std::size_t>(d.a.material)].real_youngs_modulus;
+        const double ej_real = spec_.materials[static_cast<std::size_t>(mat_j)].real_youngs_modulus;
+        const double e_eff =
+            effective_modulus(ei_real > 0.0 ? ei_real : mi.youngs_modulus, mi.poisson_ratio,
+                              ej_real > 0.0 ? ej_real : mj.youngs_modulus, mj.poisson_ratio);
+        double energy = 0.0; // J into i per kelvin of T_j - T_i
+        double rc = 0.0;
+        try {
+            const double tc = heat::hertz_impact_duration(e.m_eff, e_eff, e.r_eff, e.speed);
+            rc = heat::hertz_impact_radius(e.m_eff, e_eff, e.r_eff, e.speed);
+            energy = heat::impact_heat(side(d.a.material), side(mat_j), tc, rc, 0.0, 1.0);
+        } catch (const InputError& err) {
+            throw RunError(sys.step_count(),
+                           fmt::format("{} (impact of particle {} at step {}, {:.3g} m/s)",
+                                       err.what(), e.id_i, e.step, e.speed));
+        }
+        // Exchanged over this thermal step as a lagged conductance: with one sub-step the heat
+        // moved is E (T_j - T_i) with the temperatures at the start of the step.
+        d.conductance = energy / dt_;
+        // Resolved spheres: the patches under the impact's contact disc, at the normal of the
+        // onset (spheres carry no orientation: world axes = body frame).
+        const Vec3 n(e.normal[0], e.normal[1], e.normal[2]);
+        const auto patches = [&](const Record& r, const Vec3& nb) {
+            const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
+            const Vec3 x = t.radius * nb;
+            std::vector<int> out = heat::contact_patches(*t.grid, x, nb, rc);
+            if (!t.spherical) {
+                widen_to_one_cell(*t.grid, t.capacity, t.full_cell_capacity, x, nb, out);
+            }
+            return out;
+        };
+        if (d.a.templ >= 0) {
+            d.patches_a = patches(d.a, n);
+        }
+        if (!d.wall && d.b.templ >= 0) {
+            d.patches_b = patches(d.b, -n);
+        }
+        const auto ia = static_cast<std::size_t>(index[static_cast<std::size_t>(e.id_i)]);
+        g_sum[ia] += d.conductance;
+        double pair_rate = d.conductance / patch_capacity(d.a, d.patches_a);
+        if (!d.wall) {
+            g_sum[static_cast<std::size_t>(index[static_cast<std::size_t>(e.id_j)])] +=
+                d.conductance;
+            pair_rate += d.conductance / patch_capacity(d.b, d.patches_b);
+        }
+        worst = std::max(worst, pair_rate);
+        data_.push_back(std::move(d));
+        ++taken;
+    }
+    collisions_ += taken;
+    onsets_.clear();
 }
 
 void ThermalSystem::particle_temperatures(const dynamics::System& sys,
@@ -944,6 +1187,7 @@ ThermalState ThermalSystem::save_state() const {
     s.ids = slot_ids_;
     s.external_heat = external_heat_;
     s.counters = counters_;
+    s.onsets = onsets_;
     return s;
 }
 
@@ -963,6 +1207,7 @@ void ThermalSystem::restore_state(const ThermalState& s, const dynamics::System&
     lumped_ = s.lumped;
     external_heat_ = s.external_heat;
     counters_ = s.counters;
+    onsets_ = s.onsets;
 }
 
 void ThermalSystem::set_temperature(std::int64_t id, double t) {
@@ -1039,6 +1284,7 @@ std::string ThermalSystem::summary_json() const {
     j += fmt::format("    \"conducting_contacts\": {},\n", k.contacts);
     j += fmt::format("    \"gas_gap_pairs\": {},\n", gas_pairs_);
     j += fmt::format("    \"radiation_pairs\": {},\n", radiation_pairs_);
+    j += fmt::format("    \"collisions\": {},\n", collisions_);
     j += fmt::format("    \"thermal_energy\": {},\n", num(thermal_energy()));
     j += fmt::format("    \"external_heat\": {}\n", num(external_heat_));
     j += "  }";

@@ -58,6 +58,8 @@ struct ThermalState {
     std::vector<std::int64_t> ids; ///< particle id of every slot record, in slot order
     double external_heat = 0;      ///< heat that entered from outside so far (J)
     ThermalCounters counters;      ///< counters so far
+    /// Contact onsets taken from the System since the last thermal step (collision conduction).
+    std::vector<dynamics::ContactOnset> onsets;
 };
 
 /// Per-particle temperatures for output, by particle index of the store (K).
@@ -88,11 +90,13 @@ class ThermalSystem {
     ThermalSystem(const ThermalSystem&) = delete;
     ThermalSystem& operator=(const ThermalSystem&) = delete;
 
-    /// Call after every mechanical step: takes a thermal step when the step count is a multiple
-    /// of step_multiple. Returns true when it did.
+    /// Call after every mechanical step: takes the step's contact onsets (collision conduction)
+    /// and a thermal step when the step count is a multiple of step_multiple. Returns true when
+    /// it took a thermal step.
     bool after_step(const dynamics::System& sys);
 
-    /// One thermal step of step_multiple * dt from the current contacts (lagged exchange).
+    /// One thermal step of step_multiple * dt from the current contacts (lagged exchange) and the
+    /// contact onsets taken by after_step since the last one.
     void thermal_step(const dynamics::System& sys);
 
     /// Thermal step length (s).
@@ -107,6 +111,8 @@ class ThermalSystem {
     [[nodiscard]] const std::vector<MaterialChoice>& choices() const { return choice_; }
     /// Counters so far.
     [[nodiscard]] const ThermalCounters& counters() const { return counters_; }
+    /// Impacts that exchanged heat so far (collision conduction; this process, not checkpointed).
+    [[nodiscard]] long collisions() const { return collisions_; }
 
     /// Mean, core and surface temperature of every particle (K), by index of sys.particles();
     /// NaN for particles without a heat model.
@@ -152,6 +158,12 @@ class ThermalSystem {
     [[nodiscard]] std::pair<double, double> volume_area(const dynamics::System& sys,
                                                         std::size_t i) const;
     [[nodiscard]] double patch_weight(const Template& t, int patch) const;
+    /// Shares `w` (any scale) of a contact's heat rate `q` (W, into the particle) over its
+    /// `patches` of template `t`, with cell temperatures `field` and the partner's contact
+    /// temperature `t_other` (K): temperature-weighted on Cartesian grids, by area on spherical.
+    void split_weights(const Template& t, std::span<const double> field,
+                       const std::vector<int>& patches, double q, double t_other,
+                       std::vector<double>& w) const;
     [[nodiscard]] double patch_capacity(const Record& r, const std::vector<int>& patches) const;
     [[nodiscard]] double contact_temperature(const Record& r, const ContactData& c,
                                              bool side_j) const;
@@ -163,6 +175,10 @@ class ThermalSystem {
     /// radiation_cutoff to data_ (coefficient K, W/K^4), with the linearised conductance
     /// 4 K T^3 in `g_sum` and `worst` for the lag limit. Nothing without emissivities.
     void add_radiation(const dynamics::System& sys, std::vector<double>& g_sum, double& worst);
+    /// Appends one exchange per pending contact onset (collision conduction) to data_: the
+    /// impact heat E of collision_conduction.hpp as the conductance E / (dt_thermal (T_j - T_i))
+    /// for this thermal step, so one step moves E exactly; then clears the onsets.
+    void add_collisions(const dynamics::System& sys, std::vector<double>& g_sum, double& worst);
 
     HeatSpec spec_;
     double dt_ = 0;
@@ -178,11 +194,12 @@ class ThermalSystem {
     std::vector<Record> by_id_;      // indexed by particle id
     std::vector<double> radius_;     // by particle id (m)
     heat::TemperaturePool pool_;
-    std::vector<int> pool_template_;      // template of each pool slot
-    std::vector<double> lumped_;          // lumped temperatures (K)
-    std::vector<double> lumped_capacity_; // rho c V (J/K)
-    std::vector<double> lumped_area_;     // surface area (m^2)
-    std::vector<std::int64_t> slot_ids_;  // id of each record created, in creation order
+    std::vector<int> pool_template_;        // template of each pool slot
+    std::vector<double> lumped_;            // lumped temperatures (K)
+    std::vector<double> lumped_capacity_;   // rho c V (J/K)
+    std::vector<double> lumped_area_;       // surface area (m^2)
+    std::vector<double> lumped_emissivity_; // emissivity of each lumped slot (-)
+    std::vector<std::int64_t> slot_ids_;    // id of each record created, in creation order
     std::vector<dynamics::ContactRecord> contacts_;
     std::vector<ContactData> data_;
     std::vector<double> face_rate_;        // heat rate per boundary face of every pool slot (W)
@@ -192,6 +209,7 @@ class ThermalSystem {
     // correction to the template's uniform h per sub-step (W).
     std::vector<double> stag_h_;
     std::vector<double> conv_rate_;
+    std::vector<double> rad_rate_;    // lagged radiation to the ambient per face, this sub-step (W)
     std::vector<double> lumped_rate_; // contact heat rate per lumped slot (W)
     double external_heat_ = 0;
     ThermalCounters counters_;
@@ -199,6 +217,8 @@ class ThermalSystem {
     // Pairs summed over this process's thermal steps (summary.json; not checkpointed).
     long gas_pairs_ = 0;       // gas-gap pairs
     long radiation_pairs_ = 0; // radiating pairs
+    long collisions_ = 0;      // impacts that exchanged heat (collision conduction)
+    std::vector<dynamics::ContactOnset> onsets_; // taken from the System, not yet exchanged
     bool warned_lag_ = false;
     bool warned_solver_ = false;
 };

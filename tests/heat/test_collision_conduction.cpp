@@ -28,6 +28,15 @@ TEST(CollisionConduction, ImpactDurationIsHertzs) {
     constexpr double constant_tolerance = 1.5e-3; // the seed rounds 2.9432 to 2.94 (1.1e-3)
     EXPECT_NEAR(t_c, 2.9432 * delta / v, constant_tolerance * t_c);
     EXPECT_THROW((void)hertz_impact_duration(m_eff, e_eff, 0.5 * r, 0.0), InputError);
+    // The largest contact radius of the same impact: the Hertz circle at delta_max, and delta_max
+    // equals the kinetic energy of the approach stored in the Hertz spring,
+    // 1/2 m* v^2 = 8/15 E* sqrt(R*) delta_max^(5/2).
+    const double a = hertz_impact_radius(m_eff, e_eff, 0.5 * r, v);
+    EXPECT_NEAR(a * a, 0.5 * r * delta, formula_tolerance * a * a);
+    EXPECT_NEAR(0.5 * m_eff * v * v,
+                8.0 / 15.0 * e_eff * std::sqrt(0.5 * r) * std::pow(a * a / (0.5 * r), 2.5),
+                1e-12 * m_eff * v * v);
+    EXPECT_THROW((void)hertz_impact_radius(m_eff, e_eff, 0.5 * r, -1.0), InputError);
 }
 
 TEST(CollisionConduction, HeatPerImpactIsTheSunChenEnergy) {

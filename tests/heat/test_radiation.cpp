@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <numbers>
 #include <random>
+#include <tuple>
 
 namespace kiln::heat {
 namespace {
@@ -95,6 +96,31 @@ TEST(Radiation, ExchangeIsReciprocalForUnequalSpheres) {
     EXPECT_DOUBLE_EQ(radiative_conductance_bound(2.0, 300.0, 500.0), 4.0 * 2.0 * 125e6);
     EXPECT_THROW((void)radiative_coefficient(1e-3, 1e-3, 1.5e-3, 0.5, 0.5), InputError);
     EXPECT_THROW((void)radiative_coefficient(1e-3, 1e-3, 3e-3, 1.5, 0.5), InputError);
+}
+
+} // namespace
+} // namespace kiln::heat
+
+namespace kiln::heat {
+namespace {
+
+TEST(Radiation, SurfaceTemperatureBalancesConductionAndAmbientRadiation) {
+    // Node at 1000 K, 0.5 mm below a black surface in a 300 K enclosure, k = 1 W/(m K): the
+    // surface balance k (T_n - T_s) / d = eps sigma (T_s^4 - T_a^4) holds to rounding.
+    // Residual of the balance relative to its largest term (k / d) T_node: a conductive surface
+    // (k / d = 8e5 W/(m^2 K)) fixes T_s to ~1e-12 K, which is all the double can tell.
+    constexpr double balance_tolerance = 1e-13;
+    for (const auto& [k, eps, tn] : {std::tuple{1.0, 1.0, 1000.0}, std::tuple{0.05, 0.6, 1500.0},
+                                     std::tuple{400.0, 0.9, 350.0}, std::tuple{1.0, 1.0, 200.0}}) {
+        const double d = 5e-4;
+        const double ts = radiating_surface_temperature(tn, d, k, eps, 300.0);
+        const double radiated = eps * stefan_boltzmann * (std::pow(ts, 4) - std::pow(300.0, 4));
+        EXPECT_NEAR(k * (tn - ts) / d, radiated, balance_tolerance * (k / d) * tn);
+        // Between the node and the enclosure (maximum principle of the surface balance).
+        EXPECT_LE(std::min(tn, 300.0), ts);
+        EXPECT_LE(ts, std::max(tn, 300.0));
+    }
+    EXPECT_EQ(radiating_surface_temperature(800.0, 0.0, 1.0, 1.0, 300.0), 800.0);
 }
 
 } // namespace

@@ -192,6 +192,33 @@ TEST(CaseReaderHeat, RadiationKeysReadWithDefaultsAndRanges) {
     EXPECT_DOUBLE_EQ(r.heat.radiation_cutoff, 2.0);
 }
 
+TEST(CaseReaderHeat, CollisionConductionKeySwitchesOnsetRecording) {
+    // Default off: the force loop records nothing (the sphere kernel runs as without heat).
+    const CaseSpec d = read_case_text(base, "case.toml");
+    EXPECT_FALSE(d.heat.collision_conduction);
+    EXPECT_FALSE(d.scene.record_contact_onsets);
+    EXPECT_NE(d.resolved_toml.find("collision_conduction = false"), std::string::npos);
+    const CaseSpec c = read_case_text(
+        edit("step_multiple = 50", "step_multiple = 50\ncollision_conduction = true"), "case.toml");
+    EXPECT_TRUE(c.heat.collision_conduction);
+    EXPECT_TRUE(c.scene.record_contact_onsets);
+    const std::string e =
+        error_of(edit("step_multiple = 50", "step_multiple = 50\ncollision_conduction = 1"));
+    EXPECT_NE(e.find("heat.collision_conduction"), std::string::npos) << e;
+}
+
+TEST(CaseReaderHeat, RadiationTemperatureIsOptionalAndPositive) {
+    const CaseSpec d = read_case_text(base, "case.toml");
+    EXPECT_TRUE(std::isnan(d.heat.radiation_temperature)); // default: no ambient radiation
+    const CaseSpec c = read_case_text(
+        edit("step_multiple = 50", "step_multiple = 50\nradiation_temperature = 350"), "case.toml");
+    EXPECT_DOUBLE_EQ(c.heat.radiation_temperature, 350.0);
+    EXPECT_NE(c.resolved_toml.find("radiation_temperature = 350"), std::string::npos);
+    const std::string e =
+        error_of(edit("step_multiple = 50", "step_multiple = 50\nradiation_temperature = 0"));
+    EXPECT_NE(e.find("heat.radiation_temperature"), std::string::npos) << e;
+}
+
 TEST(CaseReaderHeat, HotWallNeedsAMaterialWithConductivity) {
     const std::string e = error_of(edit("material = \"glass\"\nmin", "material = \"steel\"\nmin"));
     EXPECT_NE(e.find("wall[0].temperature"), std::string::npos) << e;

@@ -109,6 +109,50 @@ TEST(Checkpoint, RestartContinuesTemperaturesBitForBit) {
     std::filesystem::remove(file);
 }
 
+TEST(Checkpoint, RestartKeepsPendingImpactsOfCollisionConduction) {
+    // Onsets taken since the last thermal step are exchanged at the next one: a checkpoint
+    // between the two must carry them, or the restarted run would lose those impacts.
+    const auto file = std::filesystem::temp_directory_path() / "kiln_test_checkpoint_onsets.bin";
+    dynamics::SceneSpec scene = pour();
+    scene.record_contact_onsets = true;
+    thermal::HeatSpec heat = pour_heat();
+    heat.collision_conduction = true;
+    dynamics::System a(scene);
+    thermal::ThermalSystem ha(heat, a);
+    const auto advance = [](dynamics::System& s, thermal::ThermalSystem& h, int steps) {
+        for (int k = 0; k < steps; ++k) {
+            s.step();
+            h.after_step(s);
+        }
+    };
+    advance(a, ha, 3000);
+    int extra = 0;
+    while (ha.save_state().onsets.empty() && extra < 20000) {
+        advance(a, ha, 1);
+        ++extra;
+    }
+    const thermal::ThermalState saved = ha.save_state();
+    ASSERT_FALSE(saved.onsets.empty()); // the pour has impacts
+    write_checkpoint(file, a.save_state(), &saved);
+    advance(a, ha, 3000);
+    dynamics::System b(scene);
+    thermal::ThermalSystem hb(heat, b);
+    b.restore_state(read_checkpoint(file));
+    const auto restored = read_checkpoint_heat(file);
+    ASSERT_TRUE(restored.has_value());
+    EXPECT_EQ(restored->onsets.size(), saved.onsets.size());
+    hb.restore_state(*restored, b);
+    advance(b, hb, 3000);
+    thermal::ParticleTemperatures ta;
+    thermal::ParticleTemperatures tb;
+    ha.particle_temperatures(a, ta);
+    hb.particle_temperatures(b, tb);
+    EXPECT_EQ(ta.mean, tb.mean); // exact equality is the point
+    EXPECT_EQ(ha.thermal_energy(), hb.thermal_energy());
+    EXPECT_GT(ha.collisions(), 0);
+    std::filesystem::remove(file);
+}
+
 /// A pour of clumps and superquadrics onto spheres in a tube.
 dynamics::SceneSpec body_pour() {
     dynamics::SceneSpec s = pour();

@@ -951,9 +951,15 @@ TEST(ThermalSystem, GasGapRefusesHeatedNonSphericalParticles) {
         FAIL() << "radiation with bodies must be refused";
     } catch (const InputError& e) {
         const std::string what = e.what();
-        EXPECT_NE(what.find("radiation for non-spherical shapes: not yet"), std::string::npos)
+        EXPECT_NE(what.find("radiation between non-spherical neighbours: not yet"),
+                  std::string::npos)
             << what;
     }
+    // With radiation to the ambient they are accepted (radiating to it only) with a warning.
+    h.radiation_temperature = 300.0;
+    ThermalSystem heat(h, sys);
+    ASSERT_FALSE(heat.warnings().empty());
+    EXPECT_NE(heat.warnings().front().find("radiate to the ambient only"), std::string::npos);
 }
 
 } // namespace
