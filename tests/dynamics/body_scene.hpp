@@ -1,12 +1,19 @@
 #pragma once
 // Helpers shared by the tests of bodies in the step loop (test_bodies, test_polyhedra,
-// test_body_rolling): templates by name, a one-material scene, placed bodies, and the momenta
-// the invariants are checked on. World frame throughout.
+// test_body_rolling): templates by name, a one-material scene, a plane or mesh floor, placed
+// bodies, a face-down polyhedron, and the momenta the invariants are checked on. World frame
+// throughout.
 
+#include "common/wall_box.hpp"
 #include "dynamics/system.hpp"
+#include "geometry/mesh_wall.hpp"
+#include "geometry/polyhedron_contact.hpp"
 #include "geometry/shape.hpp"
 #include "io/shape_reader.hpp"
 
+#include <cmath>
+#include <memory>
+#include <numbers>
 #include <string>
 
 namespace kiln::dynamics::test {
@@ -32,6 +39,30 @@ inline SceneSpec base_scene() {
     s.materials.push_back({"m", 1e7, 0.3, 2500, 0.5, 0.3, 0.0});
     s.time_step = 2e-6;
     return s;
+}
+
+/// Adds a floor of material 0 at z = 0 facing +z: the analytic plane, or, when `mesh`, the top
+/// face of the 20 mm box read from shapes/wall_box_20mm.stl (two triangles sharing a diagonal).
+inline void add_floor(SceneSpec& s, bool mesh) {
+    if (mesh) {
+        const io::MeshInput m = kiln::test::wall_box_20mm();
+        s.mesh_walls.push_back(
+            {"floor", std::make_shared<const geometry::MeshWall>(m.points, m.triangles, "box"), 0});
+    } else {
+        s.walls.push_back({"floor", PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
+    }
+}
+
+/// Orientation (body -> world) that turns the first face of polyhedron `poly` to face down (its
+/// outward normal along -z in the world frame).
+inline Quat face_down(const geometry::ConvexPolyhedron& poly) {
+    const Vec3 n = geometry::polyhedron_features(poly).face_normals.at(0);
+    const Vec3 axis = n.cross(Vec3(0, 0, -1));
+    if (axis.norm() < 1e-12) {
+        return n.z() < 0 ? Quat::Identity()
+                         : Quat(Eigen::AngleAxisd(std::numbers::pi, Vec3::UnitX()));
+    }
+    return Quat(Eigen::AngleAxisd(std::atan2(axis.norm(), -n.z()), axis.normalized()));
 }
 
 /// A particle of template `shape_index` at x (m) with velocity v (m/s), angular velocity omega

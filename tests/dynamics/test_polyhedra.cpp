@@ -5,12 +5,10 @@
 #include "body_scene.hpp"
 #include "core/error.hpp"
 #include "dynamics/system.hpp"
-#include "io/mesh_reader.hpp"
 #include "io/shape_reader.hpp"
 
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <gtest/gtest.h>
 #include <limits>
 #include <memory>
@@ -105,22 +103,10 @@ TEST(Polyhedra, CubeRestsFlatOnAPlaneAndOnAMeshFloor) {
         SceneSpec s = base_scene();
         s.gravity = Vec3(0, 0, -9.81);
         s.shapes.push_back(shape("cube"));
-        if (mesh) {
-            io::MeshInput m = io::read_mesh_file(
-                std::filesystem::path(KILN_SOURCE_DIR) / "shapes" / "wall_box_20mm.stl", 1e-3);
-            s.mesh_walls.push_back(
-                {"floor", std::make_shared<const geometry::MeshWall>(m.points, m.triangles, "box"),
-                 0});
-        } else {
-            s.walls.push_back({"floor", PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
-        }
+        test::add_floor(s, mesh);
         const auto& cube = std::get<geometry::ConvexPolyhedron>(s.shapes[0].shape);
         const Vec3 n = geometry::polyhedron_features(cube).face_normals[0];
-        const Vec3 axis = n.cross(Vec3(0, 0, -1));
-        const Quat q =
-            axis.norm() < 1e-12
-                ? Quat::Identity()
-                : Quat(Eigen::AngleAxisd(std::atan2(axis.norm(), -n.z()), axis.normalized()));
+        const Quat q = test::face_down(cube);
         s.particles.push_back(body(0, Vec3(1e-3, 2e-3, 1.2e-3), Vec3::Zero(), Vec3::Zero(), q));
         System sys(s);
         for (int k = 0; k < 50000; ++k) {
@@ -141,15 +127,7 @@ TEST(Polyhedra, SphereOnAMeshFloorRestsAsOnAPlane) {
     for (const int mesh : {0, 1}) {
         SceneSpec s = base_scene();
         s.gravity = Vec3(0, 0, -9.81);
-        if (mesh != 0) {
-            io::MeshInput m = io::read_mesh_file(
-                std::filesystem::path(KILN_SOURCE_DIR) / "shapes" / "wall_box_20mm.stl", 1e-3);
-            s.mesh_walls.push_back(
-                {"floor", std::make_shared<const geometry::MeshWall>(m.points, m.triangles, "box"),
-                 0});
-        } else {
-            s.walls.push_back({"floor", PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
-        }
+        test::add_floor(s, mesh != 0);
         // On the diagonal shared by the two top triangles: no bump, one contact.
         s.particles.emplace_back(0, 1.4e-3, Vec3(1e-3, 1e-3, 1.5e-3), Vec3(0.01, 0.01, 0),
                                  Vec3::Zero());
@@ -171,15 +149,7 @@ TEST(Polyhedra, SuperquadricOnAMeshFloorRestsAsOnAPlane) {
     for (const int mesh : {0, 1}) {
         SceneSpec s = base_scene();
         s.gravity = Vec3(0, 0, -9.81);
-        if (mesh != 0) {
-            io::MeshInput m = io::read_mesh_file(
-                std::filesystem::path(KILN_SOURCE_DIR) / "shapes" / "wall_box_20mm.stl", 1e-3);
-            s.mesh_walls.push_back(
-                {"floor", std::make_shared<const geometry::MeshWall>(m.points, m.triangles, "box"),
-                 0});
-        } else {
-            s.walls.push_back({"floor", PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
-        }
+        test::add_floor(s, mesh != 0);
         s.shapes.push_back(shape("ellipsoid_123"));
         const Quat q0(Eigen::AngleAxisd(1.2, Vec3(1, 0.3, 0).normalized()));
         s.particles.push_back(
@@ -206,15 +176,7 @@ TEST(Polyhedra, ClumpOnAMeshFloorRestsAsOnAPlane) {
     for (const int mesh : {0, 1}) {
         SceneSpec s = base_scene();
         s.gravity = Vec3(0, 0, -9.81);
-        if (mesh != 0) {
-            io::MeshInput m = io::read_mesh_file(
-                std::filesystem::path(KILN_SOURCE_DIR) / "shapes" / "wall_box_20mm.stl", 1e-3);
-            s.mesh_walls.push_back(
-                {"floor", std::make_shared<const geometry::MeshWall>(m.points, m.triangles, "box"),
-                 0});
-        } else {
-            s.walls.push_back({"floor", PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
-        }
+        test::add_floor(s, mesh != 0);
         s.shapes.push_back(shape("cylinder_12"));
         // The ParticleSpec radius is left unset, as a case file's body particle has it.
         s.particles.push_back(body(0, Vec3(0.3e-3, 0.2e-3, 3.05e-3)));

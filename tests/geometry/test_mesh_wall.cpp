@@ -2,11 +2,11 @@
 // triangles for spheres and polyhedra, a concave corner giving two contacts, and a sphere dropped
 // on the top face of a box read from STL rebounding as from an analytic plane.
 
+#include "common/wall_box.hpp"
 #include "contact/contact_law.hpp"
 #include "core/error.hpp"
 #include "core/material.hpp"
 #include "geometry/mesh_wall.hpp"
-#include "io/mesh_reader.hpp"
 #include "io/shape_reader.hpp"
 
 #include <Eigen/Geometry>
@@ -205,8 +205,7 @@ TEST(MeshWall, CubeOnMeshBoxMatchesTheCommonPlaneWithTheBoxAsABody) {
     // Random cube poses touching the top face of shapes/wall_box_20mm.stl away from its rim: the
     // facet contact's overlap must equal the common-plane overlap with the same box taken as a
     // convex body (the plane is then the box's top face), and the patch areas must agree.
-    const auto mesh = kiln::io::read_mesh_file(
-        std::filesystem::path(KILN_SOURCE_DIR) / "shapes" / "wall_box_20mm.stl", 1e-3);
+    const auto mesh = kiln::test::wall_box_20mm();
     const g::MeshWall box(mesh.points, mesh.triangles, "wall_box_20mm.stl");
     const g::ConvexPolyhedron solid = g::make_polyhedron(mesh.points, mesh.triangles, "box");
     const g::PolyhedronFeatures box_features = g::polyhedron_features(solid);
@@ -275,8 +274,7 @@ TEST(MeshWall, SphereReboundsFromAMeshBoxAsFromAPlane) {
     // shapes/wall_box_20mm.stl, at the face centre and on the diagonal shared by its two
     // triangles, against the analytic plane z = 0: same rebound within 1 % (issue), and the
     // prescribed restitution within 1e-3 (time step error of 200 steps per contact).
-    const auto mesh = kiln::io::read_mesh_file(
-        std::filesystem::path(KILN_SOURCE_DIR) / "shapes" / "wall_box_20mm.stl", 1e-3);
+    const auto mesh = kiln::test::wall_box_20mm();
     const g::MeshWall box(mesh.points, mesh.triangles, "wall_box_20mm.stl");
     EXPECT_EQ(box.facet_count(), 6);
     kiln::Material mat;
