@@ -59,6 +59,12 @@ struct BodyContact {
     Vec3 force = Vec3::Zero();   ///< force on a (N)
 };
 
+/// One stored element contact: its key and its record (world frame).
+struct BodyContactEntry {
+    BodyContactKey key;  ///< particle ids and element indices
+    BodyContact contact; ///< history and last geometry
+};
+
 /// Result of one element-element or element-wall geometry query, world frame.
 struct ElementContact {
     bool touching = false;       ///< overlap > 0

@@ -7,7 +7,7 @@
 #include "geometry/rotation.hpp"
 
 #include <algorithm>
-#include <map>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -35,8 +35,88 @@ void System::rotate_bodies(bool drift) {
     }
 }
 
+void System::rekey_body_contacts() {
+    // Groups of the evaluation order of body_forces(): pairs {0, list entry, 0, element of a},
+    // plane walls {1, particle, wall, element}, mesh walls {2, mesh wall, particle, element}. A
+    // record whose pair left the list (it cannot be touching) is dropped.
+    body_groups_.clear();
+    if (body_contacts_.empty()) {
+        return;
+    }
+    constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
+    std::int64_t max_id = 0;
+    for (const std::int64_t id : p_.id) {
+        max_id = std::max(max_id, id);
+    }
+    std::vector<std::uint32_t> index(static_cast<std::size_t>(max_id) + 1, none);
+    for (std::size_t i = 0; i < p_.size(); ++i) {
+        index[static_cast<std::size_t>(p_.id[i])] = static_cast<std::uint32_t>(i);
+    }
+    const auto index_of = [&](std::int64_t id) {
+        return id >= 0 && id <= max_id ? index[static_cast<std::size_t>(id)] : none;
+    };
+    const auto& offsets = nl_.offsets();
+    const auto& nb = nl_.partners();
+    const auto entry_of = [&](std::uint32_t i, std::uint32_t j) {
+        for (std::uint32_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+            if (nb[k] == j) {
+                return k;
+            }
+        }
+        return none;
+    };
+    const auto n_walls = static_cast<std::int64_t>(spec_.walls.size());
+    std::vector<std::pair<ContactGroup, std::uint32_t>> order;
+    order.reserve(body_contacts_.size());
+    for (std::size_t r = 0; r < body_contacts_.size(); ++r) {
+        const BodyContactKey& key = body_contacts_[r].key;
+        const std::uint32_t ia = index_of(key.a);
+        if (ia == none) {
+            continue;
+        }
+        const auto ea = static_cast<std::uint32_t>(key.ea);
+        ContactGroup g{};
+        if (key.b >= 0) {
+            const std::uint32_t ib = index_of(key.b);
+            std::uint32_t k = ib == none ? none : entry_of(ia, ib);
+            k = k == none && ib != none ? entry_of(ib, ia) : k;
+            if (k == none) {
+                continue;
+            }
+            g = {0, k, 0, ea};
+        } else if (-1 - key.b < n_walls) {
+            g = {1, ia, static_cast<std::uint32_t>(-1 - key.b), ea};
+        } else {
+            g = {2, static_cast<std::uint32_t>(-1 - key.b - n_walls), ia, ea};
+        }
+        order.emplace_back(g, static_cast<std::uint32_t>(r));
+    }
+    std::stable_sort(order.begin(), order.end(),
+                     [](const auto& l, const auto& r) { return l.first < r.first; });
+    next_contacts_.clear();
+    for (const auto& [g, r] : order) {
+        next_contacts_.push_back(body_contacts_[r]);
+        body_groups_.push_back(g);
+    }
+    body_contacts_.swap(next_contacts_);
+}
+
 void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
-    std::map<BodyContactKey, BodyContact> next;
+    next_contacts_.clear();
+    next_groups_.clear();
+    // Last step's records are met in the order they were stored: `cursor` only moves forward.
+    std::size_t cursor = 0;
+    const auto find_old = [&](const ContactGroup& g, std::int32_t eb) -> const BodyContact* {
+        while (cursor < body_groups_.size() && body_groups_[cursor] < g) {
+            ++cursor;
+        }
+        for (std::size_t r = cursor; r < body_groups_.size() && body_groups_[r] == g; ++r) {
+            if (body_contacts_[r].key.eb == eb) {
+                return &body_contacts_[r].contact;
+            }
+        }
+        return nullptr;
+    };
     const double dt = spec_.time_step;
     const auto tmpl = [&](std::uint32_t i) -> const geometry::ShapeTemplate* {
         return p_.shape[i] >= 0 ? &spec_.shapes[static_cast<std::size_t>(p_.shape[i])] : nullptr;
@@ -61,13 +141,12 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
         [&](const auto& law) {
             // One element contact: the law at the contact point with the velocity of that point;
             // force on a, reaction on b (b < 0: a wall, at rest with infinite mass).
-            // `it`: the contact's entry of the last step, or body_contacts_.end() (a new one).
-            // A kept contact moves its map node into `next` (no allocation per contact-step).
-            using Iter = std::map<BodyContactKey, BodyContact>::iterator;
+            // `old`: the contact's record of the last step, or nullptr (a new one); the record of
+            // this step is appended to the next table under group `g`.
             const auto apply = [&](std::uint32_t a, long b, const BodyContactKey& key,
-                                   const ElementContact& ec, Iter it, int material_b, double ratio,
+                                   const ContactGroup& g, const ElementContact& ec,
+                                   const BodyContact* old, int material_b, double ratio,
                                    ChunkTotals& t) {
-                const BodyContact* old = it == body_contacts_.end() ? nullptr : &it->second;
                 const Vec3 ra = ec.point - p_.x[a];
                 Vec3 v_rel = p_.v[a] + p_.omega[a].cross(ra);
                 double m_eff = p_.mass[a];
@@ -98,14 +177,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     p_.force[j] -= out.force;
                     p_.torque[j] += out.torque_j - rb.cross(out.force);
                 }
-                const BodyContact now{shear, ec.normal, ec.point, ec.overlap, r_eff, out.force};
-                if (old != nullptr) {
-                    auto node = body_contacts_.extract(it);
-                    node.mapped() = now;
-                    next.insert(next.end(), std::move(node));
-                } else {
-                    next.emplace_hint(next.end(), key, now);
-                }
+                next_contacts_.push_back(
+                    {key, BodyContact{shear, ec.normal, ec.point, ec.overlap, r_eff, out.force}});
+                next_groups_.push_back(g);
                 t.energy += out.elastic_energy;
                 t.max_ratio = std::max(t.max_ratio, ratio);
                 ++t.contacts;
@@ -126,6 +200,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 if (p_.id[a] > p_.id[b]) {
                     std::swap(a, b);
                 }
+                ContactGroup g{0, k, 0, 0};
                 const std::uint32_t a0 = element_begin_[a];
                 const std::uint32_t b0 = element_begin_[b];
                 // Elements of b that reach into a's bounding sphere (a clump pair touches with a
@@ -146,6 +221,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     if ((A.centre - p_.x[b]).squaredNorm() >= rab * rab) {
                         continue;
                     }
+                    g[3] = ea - a0;
                     for (const std::uint32_t eb : near_b) {
                         const Element& B = elements_[eb];
                         const double re = A.radius + B.radius;
@@ -155,14 +231,13 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         const BodyContactKey key{p_.id[a], p_.id[b],
                                                  static_cast<std::int32_t>(ea - a0),
                                                  static_cast<std::int32_t>(eb - b0)};
-                        const auto it = body_contacts_.find(key);
+                        const BodyContact* old = find_old(g, key.eb);
                         const bool convex = is_convex(A) || is_convex(B);
                         // Warm start (convex pairs): the last normal, else the line of centres.
                         Vec3 warm = Vec3::UnitZ();
                         if (convex) {
-                            const Vec3 guess = it != body_contacts_.end()
-                                                   ? it->second.normal
-                                                   : Vec3(A.centre - B.centre);
+                            const Vec3 guess =
+                                old != nullptr ? old->normal : Vec3(A.centre - B.centre);
                             warm = guess.squaredNorm() > 0.0 ? Vec3(guess.normalized()) : warm;
                         }
                         const ElementContact ec = element_contact(A, B, spec_.narrow_phase, &warm);
@@ -172,8 +247,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                             np_.failures += ec.converged ? 0 : 1;
                         }
                         if (ec.touching) {
-                            apply(a, b, key, ec, it, p_.material[b], ec.overlap / ratio_size(A, &B),
-                                  pair_totals);
+                            apply(a, b, key, g, ec, old, p_.material[b],
+                                  ec.overlap / ratio_size(A, &B), pair_totals);
                         }
                     }
                 }
@@ -196,8 +271,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         }
                         const BodyContactKey key{p_.id[a], -1 - static_cast<std::int64_t>(w),
                                                  static_cast<std::int32_t>(ea - a0), 0};
-                        const auto it = body_contacts_.find(key);
-                        apply(a, -1, key, ec, it, spec_.walls[w].material,
+                        const ContactGroup g{1, a, static_cast<std::uint32_t>(w), ea - a0};
+                        apply(a, -1, key, g, ec, find_old(g, key.eb), spec_.walls[w].material,
                               ec.overlap / ratio_size(elements_[ea], nullptr), wall_totals);
                     }
                 }
@@ -234,8 +309,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                                 p_.id[a], -1 - n_walls - static_cast<std::int64_t>(m),
                                 static_cast<std::int32_t>(ea - a0),
                                 (static_cast<std::int32_t>(mc.feature) << 28) | mc.id};
-                            const auto it = body_contacts_.find(key);
-                            apply(a, -1, key, ec, it, mw.material,
+                            const ContactGroup g{2, static_cast<std::uint32_t>(m), a, ea - a0};
+                            apply(a, -1, key, g, ec, find_old(g, key.eb), mw.material,
                                   ec.overlap / ratio_size(A, nullptr), wall_totals);
                         }
                     }
@@ -243,7 +318,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             }
         },
         spec_.contact.law);
-    body_contacts_.swap(next);
+    body_contacts_.swap(next_contacts_);
+    body_groups_.swap(next_groups_);
 }
 
 } // namespace kiln::dynamics
