@@ -217,9 +217,11 @@ void System::index_bodies() {
     bodies_.clear();
     body_entries_.clear();
     has_bodies_ = false;
+    rot_.resize(p_.size());
     for (std::size_t i = 0; i < p_.size(); ++i) {
         if (p_.shape[i] >= 0) {
             bodies_.push_back(static_cast<std::uint32_t>(i));
+            rot_[i] = geometry::rotation_matrix(p_.q[i]);
             has_bodies_ = true;
         }
     }

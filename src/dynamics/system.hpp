@@ -195,6 +195,9 @@ class System {
     bool has_bodies_ = false;
     std::vector<std::uint32_t> bodies_;       // indices of the body particles
     std::vector<std::uint32_t> body_entries_; // list entries with a body on either side
+    // R(q) of each body (body -> world; particle index, unused for spheres): set from q at every
+    // list rebuild and restart, carried by free_rotate between them (the same function of q).
+    std::vector<Mat3> rot_;
     // Element contact histories in a flat table, in the order body_forces() meets them: grouped by
     // (section, list entry or particle, wall, element of a), groups in increasing order, so each
     // step finds last step's record with a forward cursor (no search). Re-grouped by key only when

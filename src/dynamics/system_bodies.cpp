@@ -26,12 +26,14 @@ void System::rotate_bodies(bool drift) {
     // Half kick of the world angular momentum, then (drift) the free rotation over the step by the
     // symmetric splitting of geometry/rotation.hpp; omega is derived from (q, L) for the contacts.
     const double h = 0.5 * spec_.time_step;
+    // One rotation matrix per body carries the step: it turns L into the body frame, is replaced
+    // by that of the new q, and gives omega (no quaternion-vector products).
     for (const std::uint32_t i : bodies_) {
         geometry::kick_angular_momentum(p_.ang_mom[i], p_.torque[i], h);
         if (drift) {
-            geometry::free_rotate(p_.q[i], p_.ang_mom[i], p_.inertia[i], spec_.time_step);
+            geometry::free_rotate(p_.q[i], rot_[i], p_.ang_mom[i], p_.inertia[i], spec_.time_step);
         }
-        p_.omega[i] = geometry::angular_velocity_world(p_.q[i], p_.ang_mom[i], p_.inertia[i]);
+        p_.omega[i] = geometry::angular_velocity_world(rot_[i], p_.ang_mom[i], p_.inertia[i]);
     }
 }
 

@@ -67,6 +67,21 @@ inline void kick_angular_momentum(Vec3& L_world, const Vec3& torque_world, doubl
 /// (kg m^2, all > 0).
 void free_rotate(Quat& q, const Vec3& L_world, const Vec3& inertia_principal, double dt);
 
+/// As above for a body whose rotation matrix is kept alongside q: `rot` is rotation_matrix(q)
+/// (body -> world) on entry and rotation_matrix of the new q on exit. The same splitting, with
+/// each single-axis factor applied component by component and the sine and cosine of small
+/// angles from a series accurate to round-off (no library call in the usual case): the form the
+/// step loop uses for every body.
+void free_rotate(Quat& q, Mat3& rot, const Vec3& L_world, const Vec3& inertia_principal, double dt);
+
+/// Angular velocity in the world frame (rad/s) from rot = R(q) (body -> world), the world angular
+/// momentum (kg m^2/s) and the principal moments (kg m^2, body frame): R diag(1/I) R^T L.
+[[nodiscard]] inline Vec3 angular_velocity_world(const Mat3& rot, const Vec3& L_world,
+                                                 const Vec3& inertia_principal) {
+    const Vec3 l_body = rot.transpose() * L_world;
+    return rot * l_body.cwiseQuotient(inertia_principal);
+}
+
 /// One full velocity-Verlet rotation step with a constant torque over the step (used by tests and
 /// validation; System will call kick / free_rotate / kick around its force computation).
 void rotation_step(Quat& q, Vec3& L_world, const Vec3& inertia_principal, const Vec3& torque_world,
