@@ -93,6 +93,12 @@ void append_elements(const geometry::ShapeTemplate* t, const Vec3& x, const Quat
 void append_elements(const geometry::ShapeTemplate* t, const geometry::PolyhedronFeatures* features,
                      const Vec3& x, const Quat& q, double r, std::vector<Element>& out);
 
+/// As above with the particle's rotation matrix `rot` = R(q) (body -> world) given, which poses
+/// clump members (the step loop keeps one per body).
+void append_elements(const geometry::ShapeTemplate* t, const geometry::PolyhedronFeatures* features,
+                     const Vec3& x, const Quat& q, const Mat3& rot, double r,
+                     std::vector<Element>& out);
+
 /// Volume-equivalent sphere radius of a polyhedron template (m): the Hertz radius of its contacts
 /// (docs/theory/contact.md, "Polyhedra").
 [[nodiscard]] double equivalent_radius(const geometry::ShapeTemplate& t);

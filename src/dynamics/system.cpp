@@ -221,7 +221,7 @@ void System::index_bodies() {
     for (std::size_t i = 0; i < p_.size(); ++i) {
         if (p_.shape[i] >= 0) {
             bodies_.push_back(static_cast<std::uint32_t>(i));
-            rot_[i] = geometry::rotation_matrix(p_.q[i]);
+            rot_[i] = geometry::unit_rotation_matrix(p_.q[i]); // q is kept normalised
             has_bodies_ = true;
         }
     }

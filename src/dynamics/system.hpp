@@ -7,7 +7,7 @@
 #include "dynamics/body_contact.hpp"
 #include "dynamics/scene_spec.hpp"
 
-#include <array>
+#include <compare>
 #include <random>
 #include <string>
 #include <vector>
@@ -202,7 +202,15 @@ class System {
     // (section, list entry or particle, wall, element of a), groups in increasing order, so each
     // step finds last step's record with a forward cursor (no search). Re-grouped by key only when
     // the list or the particle order changes (rekey_body_contacts).
-    using ContactGroup = std::array<std::uint32_t, 4>;
+    struct ContactGroup {
+        std::uint64_t hi = 0; // section << 32 | list entry, particle or mesh wall
+        std::uint64_t lo = 0; // particle or wall << 32 | element of a
+        ContactGroup() = default;
+        ContactGroup(std::uint32_t section, std::uint32_t major, std::uint32_t minor,
+                     std::uint32_t element)
+            : hi(std::uint64_t{section} << 32 | major), lo(std::uint64_t{minor} << 32 | element) {}
+        auto operator<=>(const ContactGroup&) const = default;
+    };
     std::vector<BodyContactEntry> body_contacts_, next_contacts_;
     std::vector<ContactGroup> body_groups_, next_groups_;
     void rekey_body_contacts();

@@ -134,7 +134,12 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             p_.shape[i] >= 0 && !poly_features_[static_cast<std::size_t>(p_.shape[i])].edges.empty()
                 ? &poly_features_[static_cast<std::size_t>(p_.shape[i])]
                 : nullptr;
-        append_elements(tmpl(static_cast<std::uint32_t>(i)), features, p_.x[i], p_.q[i],
+        if (p_.shape[i] < 0) { // a sphere
+            elements_.push_back({Element::Kind::sphere, p_.x[i], p_.radius[i], nullptr,
+                                 Quat::Identity(), p_.radius[i]});
+            continue;
+        }
+        append_elements(tmpl(static_cast<std::uint32_t>(i)), features, p_.x[i], p_.q[i], rot_[i],
                         p_.radius[i], elements_);
     }
     element_begin_[p_.size()] = static_cast<std::uint32_t>(elements_.size());
@@ -187,6 +192,89 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 ++t.contacts;
             };
 
+            // Two sphere elements (clump members, spheres): the sphere-sphere geometry here, the
+            // law in blocks of `block` contacts through the vectorised kernel of the sphere loop
+            // (contact_law.hpp), then forces and torques about each body's centre of mass added
+            // in the order the contacts were met. The record's slot in the next table is taken
+            // when the contact is met, so the table keeps its order.
+            constexpr std::size_t block = 16;
+            contact::ContactBlock<block> cb;
+            std::uint32_t q_a[block], q_b[block], q_slot[block];
+            Vec3 q_ra[block], q_rb[block];
+            double q_ratio[block];
+            std::size_t queued = 0;
+            const double fn_floor = contact::floor_of(spec_.contact);
+            const double rolling = contact::rolling_of(spec_.contact);
+            for (std::size_t q = 0; q < block; ++q) {
+                cb.lever_i[q] = 0.0; // v is already the velocity of the contact point
+                cb.lever_j[q] = 0.0;
+            }
+            const auto flush = [&] {
+#pragma omp simd
+                for (std::size_t q = 0; q < queued; ++q) {
+                    contact::evaluate_block(law, fn_floor, rolling, cb, q, dt);
+                }
+                for (std::size_t q = 0; q < queued; ++q) {
+                    const std::uint32_t a = q_a[q];
+                    const std::uint32_t b = q_b[q];
+                    const Vec3 f(cb.f[0][q], cb.f[1][q], cb.f[2][q]);
+                    p_.force[a] += f;
+                    p_.torque[a] += q_ra[q].cross(f) + Vec3(cb.ti[0][q], cb.ti[1][q], cb.ti[2][q]);
+                    p_.force[b] -= f;
+                    p_.torque[b] += Vec3(cb.tj[0][q], cb.tj[1][q], cb.tj[2][q]) - q_rb[q].cross(f);
+                    BodyContact& rec = next_contacts_[q_slot[q]].contact;
+                    rec.shear = Vec3(cb.s[0][q], cb.s[1][q], cb.s[2][q]);
+                    rec.force = f;
+                    pair_totals.energy += cb.energy[q];
+                    pair_totals.max_ratio = std::max(pair_totals.max_ratio, q_ratio[q]);
+                    ++pair_totals.contacts;
+                }
+                queued = 0;
+            };
+            // Queues the contact of sphere elements A (of a) and B (of b), centres closer than the
+            // sum of their radii (and distinct).
+            const auto queue_spheres = [&](std::uint32_t a, std::uint32_t b, const Element& A,
+                                           const Element& B, const BodyContactKey& key,
+                                           const ContactGroup& g, const BodyContact* old) {
+                const Vec3 d = A.centre - B.centre;
+                const double dist = d.norm();
+                const double rsum = A.radius + B.radius;
+                const double overlap = rsum - dist;
+                const Vec3 n = d / dist;
+                const Vec3 point = B.centre + (B.radius - 0.5 * overlap) * n;
+                const double r_geo = A.radius * B.radius / rsum;
+                const double r_eff =
+                    first_touch && old != nullptr && old->r_eff > 0.0 ? old->r_eff : r_geo;
+                const Vec3 ra = point - p_.x[a];
+                const Vec3 rb = point - p_.x[b];
+                const Vec3 v_rel =
+                    p_.v[a] + p_.omega[a].cross(ra) - p_.v[b] - p_.omega[b].cross(rb);
+                const std::size_t q = queued;
+                for (int c = 0; c < 3; ++c) {
+                    cb.n[c][q] = n[c];
+                    cb.v[c][q] = v_rel[c];
+                    cb.wi[c][q] = p_.omega[a][c];
+                    cb.wj[c][q] = p_.omega[b][c];
+                    cb.s[c][q] = old != nullptr ? old->shear[c] : 0.0;
+                }
+                cb.overlap[q] = overlap;
+                cb.r_eff[q] = r_eff;
+                cb.m_eff[q] = p_.mass[a] * p_.mass[b] / (p_.mass[a] + p_.mass[b]);
+                cb.set_pair(q, pairs_.at(p_.material[a], p_.material[b]));
+                q_a[q] = a;
+                q_b[q] = b;
+                q_ra[q] = ra;
+                q_rb[q] = rb;
+                q_ratio[q] = overlap / ratio_size(A, &B);
+                q_slot[q] = static_cast<std::uint32_t>(next_contacts_.size());
+                next_contacts_.push_back(
+                    {key, BodyContact{Vec3::Zero(), n, point, overlap, r_eff, Vec3::Zero()}});
+                next_groups_.push_back(g);
+                if (++queued == block) {
+                    flush();
+                }
+            };
+
             // Pairs: the particle with the smaller id is a, so keys and histories do not depend
             // on the list's owner/partner order.
             const auto& nb = nl_.partners();
@@ -202,7 +290,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 if (p_.id[a] > p_.id[b]) {
                     std::swap(a, b);
                 }
-                ContactGroup g{0, k, 0, 0};
                 const std::uint32_t a0 = element_begin_[a];
                 const std::uint32_t b0 = element_begin_[b];
                 // Elements of b that reach into a's bounding sphere (a clump pair touches with a
@@ -223,7 +310,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     if ((A.centre - p_.x[b]).squaredNorm() >= rab * rab) {
                         continue;
                     }
-                    g[3] = ea - a0;
+                    const ContactGroup g(0, k, 0, ea - a0);
                     for (const std::uint32_t eb : near_b) {
                         const Element& B = elements_[eb];
                         const double re = A.radius + B.radius;
@@ -235,19 +322,20 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                                                  static_cast<std::int32_t>(eb - b0)};
                         const BodyContact* old = find_old(g, key.eb);
                         const bool convex = is_convex(A) || is_convex(B);
-                        // Warm start (convex pairs): the last normal, else the line of centres.
-                        Vec3 warm = Vec3::UnitZ();
-                        if (convex) {
-                            const Vec3 guess =
-                                old != nullptr ? old->normal : Vec3(A.centre - B.centre);
-                            warm = guess.squaredNorm() > 0.0 ? Vec3(guess.normalized()) : warm;
+                        if (!convex) {
+                            if (A.centre != B.centre) { // coincident centres: no normal
+                                queue_spheres(a, b, A, B, key, g, old);
+                            }
+                            continue;
                         }
+                        // Warm start: the last normal, else the line of centres.
+                        const Vec3 guess = old != nullptr ? old->normal : Vec3(A.centre - B.centre);
+                        const Vec3 warm =
+                            guess.squaredNorm() > 0.0 ? Vec3(guess.normalized()) : Vec3::UnitZ();
                         const ElementContact ec = element_contact(A, B, spec_.narrow_phase, &warm);
-                        if (convex) {
-                            ++np_.calls;
-                            np_.fallbacks += ec.fell_back ? 1 : 0;
-                            np_.failures += ec.converged ? 0 : 1;
-                        }
+                        ++np_.calls;
+                        np_.fallbacks += ec.fell_back ? 1 : 0;
+                        np_.failures += ec.converged ? 0 : 1;
                         if (ec.touching) {
                             apply(a, b, key, g, ec, old, p_.material[b],
                                   ec.overlap / ratio_size(A, &B), pair_totals);
@@ -255,6 +343,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     }
                 }
             }
+
+            flush();
 
             // Walls, body by body and wall by wall.
             for (const std::uint32_t a : bodies_) {

@@ -13,7 +13,10 @@ namespace kiln::geometry {
 Mat3 rotation_matrix(const Quat& q) {
     // Standard form (e.g. Shoemake 1985) with w the scalar part; the seed's printed matrix
     // (Oschmann 2019, Table 3) has a wrong (2,2) entry and sign errors and is not used.
-    const Quat u = q.normalized();
+    return unit_rotation_matrix(q.normalized());
+}
+
+Mat3 unit_rotation_matrix(const Quat& u) {
     const double w = u.w();
     const double x = u.x();
     const double y = u.y();
@@ -66,15 +69,15 @@ void sin_cos(double x, double& s, double& c) {
 /// The quaternion product with the single-axis factor (ch, sh e_k) is written out: with (i, j, k)
 /// cyclic, w' = ch w - sh v_k, v_k' = ch v_k + sh w, v_i' = ch v_i + sh v_j, v_j' = ch v_j - sh
 /// v_i.
-void rotate_about_axis(double qv[4], Vec3& l_body, const Vec3& inertia, int k, double h) {
+template <int k> void rotate_about_axis(double qv[4], Vec3& l_body, const Vec3& inertia, double h) {
     const double phi = h * l_body[k] / inertia[k];
     double sh = 0.0;
     double ch = 1.0;
     sin_cos(0.5 * phi, sh, ch);
     const double c = (ch - sh) * (ch + sh);
     const double s = 2.0 * sh * ch;
-    const int i = (k + 1) % 3;
-    const int j = (k + 2) % 3;
+    constexpr int i = (k + 1) % 3;
+    constexpr int j = (k + 2) % 3;
     const double li = l_body[i];
     const double lj = l_body[j];
     l_body[i] = c * li + s * lj;
@@ -97,18 +100,18 @@ void free_rotate(Quat& q, Mat3& rot, const Vec3& L_world, const Vec3& inertia_pr
     KILN_ASSERT((inertia_principal.array() > 0.0).all());
     Vec3 l_body = rot.transpose() * L_world;
     double qv[4] = {q.x(), q.y(), q.z(), q.w()};
-    rotate_about_axis(qv, l_body, inertia_principal, 0, 0.5 * dt);
-    rotate_about_axis(qv, l_body, inertia_principal, 1, 0.5 * dt);
-    rotate_about_axis(qv, l_body, inertia_principal, 2, dt);
-    rotate_about_axis(qv, l_body, inertia_principal, 1, 0.5 * dt);
-    rotate_about_axis(qv, l_body, inertia_principal, 0, 0.5 * dt);
+    rotate_about_axis<0>(qv, l_body, inertia_principal, 0.5 * dt);
+    rotate_about_axis<1>(qv, l_body, inertia_principal, 0.5 * dt);
+    rotate_about_axis<2>(qv, l_body, inertia_principal, dt);
+    rotate_about_axis<1>(qv, l_body, inertia_principal, 0.5 * dt);
+    rotate_about_axis<0>(qv, l_body, inertia_principal, 0.5 * dt);
     q = Quat(qv[3], qv[0], qv[1], qv[2]);
     q.normalize();
-    rot = rotation_matrix(q);
+    rot = unit_rotation_matrix(q);
 }
 
 void free_rotate(Quat& q, const Vec3& L_world, const Vec3& inertia_principal, double dt) {
-    Mat3 rot = rotation_matrix(q);
+    Mat3 rot = unit_rotation_matrix(q.normalized());
     free_rotate(q, rot, L_world, inertia_principal, dt);
 }
 

@@ -33,6 +33,9 @@ namespace kiln::geometry {
 /// Rotation matrix R(q) of a quaternion (normalised first); maps body-frame vectors to world.
 [[nodiscard]] Mat3 rotation_matrix(const Quat& q);
 
+/// Rotation matrix R(q) of a quaternion already of unit norm (not normalised again; body -> world).
+[[nodiscard]] Mat3 unit_rotation_matrix(const Quat& q);
+
 /// World-frame vector of a body-frame vector v_body under orientation q (body -> world).
 [[nodiscard]] inline Vec3 body_to_world(const Quat& q, const Vec3& v_body) {
     return q * v_body;
@@ -67,8 +70,8 @@ inline void kick_angular_momentum(Vec3& L_world, const Vec3& torque_world, doubl
 /// (kg m^2, all > 0).
 void free_rotate(Quat& q, const Vec3& L_world, const Vec3& inertia_principal, double dt);
 
-/// As above for a body whose rotation matrix is kept alongside q: `rot` is rotation_matrix(q)
-/// (body -> world) on entry and rotation_matrix of the new q on exit. The same splitting, with
+/// As above for a body whose rotation matrix is kept alongside q: `rot` is R(q) (body -> world)
+/// on entry and unit_rotation_matrix of the new (normalised) q on exit. The same splitting, with
 /// each single-axis factor applied component by component and the sine and cosine of small
 /// angles from a series accurate to round-off (no library call in the usual case): the form the
 /// step loop uses for every body.
