@@ -26,13 +26,20 @@ void System::rotate_bodies(bool drift) {
     // Half kick of the world angular momentum, then (drift) the free rotation over the step by the
     // symmetric splitting of geometry/rotation.hpp; omega is derived from (q, L) for the contacts.
     const double h = 0.5 * spec_.time_step;
-    // One rotation matrix per body carries the step: it turns L into the body frame, is replaced
-    // by that of the new q, and gives omega (no quaternion-vector products).
+    // One rotation matrix per body and step: it turns L into the body frame for the free
+    // rotation (bodies eight at a time in vector lanes), is then replaced by that of the new q,
+    // and gives omega (no quaternion-vector products).
     for (const std::uint32_t i : bodies_) {
         geometry::kick_angular_momentum(p_.ang_mom[i], p_.torque[i], h);
-        if (drift) {
-            geometry::free_rotate(p_.q[i], rot_[i], p_.ang_mom[i], p_.inertia[i], spec_.time_step);
+    }
+    if (drift) {
+        geometry::free_rotate_bodies(bodies_.data(), bodies_.size(), p_.q.data(), rot_.data(),
+                                     p_.ang_mom.data(), p_.inertia.data(), spec_.time_step);
+        for (const std::uint32_t i : bodies_) {
+            rot_[i] = geometry::unit_rotation_matrix(p_.q[i]);
         }
+    }
+    for (const std::uint32_t i : bodies_) {
         p_.omega[i] = geometry::angular_velocity_world(rot_[i], p_.ang_mom[i], p_.inertia[i]);
     }
 }
