@@ -275,6 +275,21 @@ void System::find_wall_candidates() {
             }
         }
     }
+    // Bodies: the same test with the bounding sphere, body by body (body_forces() loops so).
+    body_wall_offsets_.assign(bodies_.size() + 1, 0);
+    body_walls_.clear();
+    for (std::size_t b = 0; b < bodies_.size(); ++b) {
+        const std::uint32_t i = bodies_[b];
+        for (std::size_t w = 0; w < nw; ++w) {
+            const WallContact wc = std::visit(
+                [&](const auto& shape) { return wall_contact(shape, p_.x[i], p_.radius[i]); },
+                spec_.walls[w].shape);
+            if (wc.overlap > -nl_.skin()) {
+                body_walls_.push_back(static_cast<std::uint32_t>(w));
+            }
+        }
+        body_wall_offsets_[b + 1] = static_cast<std::uint32_t>(body_walls_.size());
+    }
 }
 
 void System::refresh() {

@@ -195,6 +195,9 @@ class System {
     bool has_bodies_ = false;
     std::vector<std::uint32_t> bodies_;       // indices of the body particles
     std::vector<std::uint32_t> body_entries_; // list entries with a body on either side
+    // Walls within the skin of each body at the last list build: those of bodies_[b] are
+    // body_walls_[body_wall_offsets_[b] .. body_wall_offsets_[b + 1]), in wall order.
+    std::vector<std::uint32_t> body_wall_offsets_, body_walls_;
     // R(q) of each body (body -> world; particle index, unused for spheres): set from q at every
     // list rebuild and restart, carried by free_rotate between them (the same function of q).
     std::vector<Mat3> rot_;

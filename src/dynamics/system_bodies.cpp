@@ -353,9 +353,13 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
 
             flush();
 
-            // Walls, body by body and wall by wall.
-            for (const std::uint32_t a : bodies_) {
-                for (std::size_t w = 0; w < spec_.walls.size(); ++w) {
+            // Walls, body by body and wall by wall: only those within the skin at the last list
+            // build can be reached (as for spheres, find_wall_candidates).
+            for (std::size_t bi = 0; bi < bodies_.size(); ++bi) {
+                const std::uint32_t a = bodies_[bi];
+                for (std::uint32_t c = body_wall_offsets_[bi]; c < body_wall_offsets_[bi + 1];
+                     ++c) {
+                    const std::uint32_t w = body_walls_[c];
                     const WallShape& ws = spec_.walls[w].shape;
                     const WallContact bound = std::visit(
                         [&](const auto& s) { return wall_contact(s, p_.x[a], p_.radius[a]); }, ws);
