@@ -495,12 +495,18 @@ void append_elements(const geometry::ShapeTemplate* t, const Vec3& x, const Quat
 
 void append_elements(const geometry::ShapeTemplate* t, const geometry::PolyhedronFeatures* features,
                      const Vec3& x, const Quat& q, double r, std::vector<Element>& out) {
+    const bool clump = t != nullptr && std::holds_alternative<geometry::Clump>(t->shape);
+    append_elements(t, features, x, q, clump ? q.toRotationMatrix() : Mat3::Identity(), r, out);
+}
+
+void append_elements(const geometry::ShapeTemplate* t, const geometry::PolyhedronFeatures* features,
+                     const Vec3& x, const Quat& q, const Mat3& rot, double r,
+                     std::vector<Element>& out) {
     if (t == nullptr) {
         out.push_back({Element::Kind::sphere, x, r, nullptr, Quat::Identity(), r});
         return;
     }
     if (const auto* c = std::get_if<geometry::Clump>(&t->shape)) {
-        const Mat3 rot = q.toRotationMatrix(); // one conversion for all members
         for (const geometry::ClumpSphere& s : c->spheres) {
             out.push_back({Element::Kind::sphere, x + rot * s.centre, s.radius, nullptr,
                            Quat::Identity(), s.radius});

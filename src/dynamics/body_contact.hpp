@@ -59,6 +59,12 @@ struct BodyContact {
     Vec3 force = Vec3::Zero();   ///< force on a (N)
 };
 
+/// One stored element contact: its key and its record (world frame).
+struct BodyContactEntry {
+    BodyContactKey key;  ///< particle ids and element indices
+    BodyContact contact; ///< history and last geometry
+};
+
 /// Result of one element-element or element-wall geometry query, world frame.
 struct ElementContact {
     bool touching = false;       ///< overlap > 0
@@ -86,6 +92,12 @@ void append_elements(const geometry::ShapeTemplate* t, const Vec3& x, const Quat
 /// polyhedron, which then must have them).
 void append_elements(const geometry::ShapeTemplate* t, const geometry::PolyhedronFeatures* features,
                      const Vec3& x, const Quat& q, double r, std::vector<Element>& out);
+
+/// As above with the particle's rotation matrix `rot` = R(q) (body -> world) given, which poses
+/// clump members (the step loop keeps one per body).
+void append_elements(const geometry::ShapeTemplate* t, const geometry::PolyhedronFeatures* features,
+                     const Vec3& x, const Quat& q, const Mat3& rot, double r,
+                     std::vector<Element>& out);
 
 /// Volume-equivalent sphere radius of a polyhedron template (m): the Hertz radius of its contacts
 /// (docs/theory/contact.md, "Polyhedra").

@@ -217,9 +217,11 @@ void System::index_bodies() {
     bodies_.clear();
     body_entries_.clear();
     has_bodies_ = false;
+    rot_.resize(p_.size());
     for (std::size_t i = 0; i < p_.size(); ++i) {
         if (p_.shape[i] >= 0) {
             bodies_.push_back(static_cast<std::uint32_t>(i));
+            rot_[i] = geometry::unit_rotation_matrix(p_.q[i]); // q is kept normalised
             has_bodies_ = true;
         }
     }
@@ -251,6 +253,7 @@ void System::index_partners() {
         as_partner_[fill[nb[k]]++] = static_cast<std::uint32_t>(k);
     }
     index_bodies();
+    rekey_body_contacts(); // the list or the particle order changed
 }
 
 void System::find_wall_candidates() {
@@ -271,6 +274,21 @@ void System::find_wall_candidates() {
                 wall_candidates_[w].push_back(static_cast<std::uint32_t>(i));
             }
         }
+    }
+    // Bodies: the same test with the bounding sphere, body by body (body_forces() loops so).
+    body_wall_offsets_.assign(bodies_.size() + 1, 0);
+    body_walls_.clear();
+    for (std::size_t b = 0; b < bodies_.size(); ++b) {
+        const std::uint32_t i = bodies_[b];
+        for (std::size_t w = 0; w < nw; ++w) {
+            const WallContact wc = std::visit(
+                [&](const auto& shape) { return wall_contact(shape, p_.x[i], p_.radius[i]); },
+                spec_.walls[w].shape);
+            if (wc.overlap > -nl_.skin()) {
+                body_walls_.push_back(static_cast<std::uint32_t>(w));
+            }
+        }
+        body_wall_offsets_[b + 1] = static_cast<std::uint32_t>(body_walls_.size());
     }
 }
 
@@ -831,7 +849,17 @@ void System::collect_contacts(std::vector<ContactRecord>& out) const {
     for (std::size_t i = 0; i < p_.size(); ++i) {
         index[static_cast<std::size_t>(p_.id[i])] = static_cast<std::uint32_t>(i);
     }
-    for (const auto& [key, bc] : body_contacts_) {
+    // The table is in evaluation order; records go out in key order, as before the flat table.
+    std::vector<std::uint32_t> by_key(body_contacts_.size());
+    for (std::size_t k = 0; k < by_key.size(); ++k) {
+        by_key[k] = static_cast<std::uint32_t>(k);
+    }
+    std::sort(by_key.begin(), by_key.end(), [&](std::uint32_t l, std::uint32_t r) {
+        return body_contacts_[l].key < body_contacts_[r].key;
+    });
+    for (const std::uint32_t k : by_key) {
+        const BodyContactKey& key = body_contacts_[k].key;
+        const BodyContact& bc = body_contacts_[k].contact;
         ContactRecord c;
         c.i = index[static_cast<std::size_t>(key.a)];
         c.wall = key.b < 0;
@@ -886,7 +914,12 @@ SystemState System::save_state() const {
     std::ostringstream os;
     os << rng_;
     s.rng = os.str();
-    s.body_contacts.assign(body_contacts_.begin(), body_contacts_.end());
+    s.body_contacts.reserve(body_contacts_.size());
+    for (const BodyContactEntry& e : body_contacts_) {
+        s.body_contacts.emplace_back(e.key, e.contact);
+    }
+    std::sort(s.body_contacts.begin(), s.body_contacts.end(),
+              [](const auto& l, const auto& r) { return l.first < r.first; });
     s.narrow_phase = np_;
     return s;
 }
@@ -902,8 +935,10 @@ void System::restore_state(SystemState s) {
     std::istringstream is(s.rng);
     is >> rng_;
     counters_ = s.counters;
-    body_contacts_ =
-        std::map<BodyContactKey, BodyContact>(s.body_contacts.begin(), s.body_contacts.end());
+    body_contacts_.clear();
+    for (const auto& [key, contact] : s.body_contacts) {
+        body_contacts_.push_back({key, contact});
+    }
     np_ = s.narrow_phase;
     // The list is restored as it was; rebuilding it now would reorder particles and change the
     // summation order. Forces and torques of the last step are part of the store; recomputing them

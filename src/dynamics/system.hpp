@@ -7,7 +7,7 @@
 #include "dynamics/body_contact.hpp"
 #include "dynamics/scene_spec.hpp"
 
-#include <map>
+#include <compare>
 #include <random>
 #include <string>
 #include <vector>
@@ -151,9 +151,10 @@ class System {
                          const Quat& q);
     /// True when the scene holds non-spherical particles.
     [[nodiscard]] bool has_bodies() const { return has_bodies_; }
-    /// Element contacts involving a body from the last force evaluation (world frame: points,
-    /// normals from b to a, overlaps, effective radii, forces on a), by key (ids, elements).
-    [[nodiscard]] const std::map<BodyContactKey, BodyContact>& body_contacts() const {
+    /// Element contacts involving a body (and mesh-wall contacts) from the last force evaluation
+    /// (world frame: points, normals from b to a, overlaps, effective radii, forces on a), each
+    /// with its key (ids, elements), in evaluation order (not key order).
+    [[nodiscard]] const std::vector<BodyContactEntry>& body_contacts() const {
         return body_contacts_;
     }
     /// Narrow-phase counters summed over the run (superquadric queries, fallbacks, failures).
@@ -214,7 +215,28 @@ class System {
     bool has_bodies_ = false;
     std::vector<std::uint32_t> bodies_;       // indices of the body particles
     std::vector<std::uint32_t> body_entries_; // list entries with a body on either side
-    std::map<BodyContactKey, BodyContact> body_contacts_;
+    // Walls within the skin of each body at the last list build: those of bodies_[b] are
+    // body_walls_[body_wall_offsets_[b] .. body_wall_offsets_[b + 1]), in wall order.
+    std::vector<std::uint32_t> body_wall_offsets_, body_walls_;
+    // R(q) of each body (body -> world; particle index, unused for spheres): set from q at every
+    // list rebuild and restart, carried by free_rotate between them (the same function of q).
+    std::vector<Mat3> rot_;
+    // Element contact histories in a flat table, in the order body_forces() meets them: grouped by
+    // (section, list entry or particle, wall, element of a), groups in increasing order, so each
+    // step finds last step's record with a forward cursor (no search). Re-grouped by key only when
+    // the list or the particle order changes (rekey_body_contacts).
+    struct ContactGroup {
+        std::uint64_t hi = 0; // section << 32 | list entry, particle or mesh wall
+        std::uint64_t lo = 0; // particle or wall << 32 | element of a
+        ContactGroup() = default;
+        ContactGroup(std::uint32_t section, std::uint32_t major, std::uint32_t minor,
+                     std::uint32_t element)
+            : hi(std::uint64_t{section} << 32 | major), lo(std::uint64_t{minor} << 32 | element) {}
+        auto operator<=>(const ContactGroup&) const = default;
+    };
+    std::vector<BodyContactEntry> body_contacts_, next_contacts_;
+    std::vector<ContactGroup> body_groups_, next_groups_;
+    void rekey_body_contacts();
     NarrowPhaseCounters np_;
     std::vector<Element> elements_;            // elements of every particle, this step
     std::vector<std::uint32_t> element_begin_; // particle i: [begin[i], begin[i + 1])

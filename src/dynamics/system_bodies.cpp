@@ -7,7 +7,7 @@
 #include "geometry/rotation.hpp"
 
 #include <algorithm>
-#include <map>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -26,17 +26,106 @@ void System::rotate_bodies(bool drift) {
     // Half kick of the world angular momentum, then (drift) the free rotation over the step by the
     // symmetric splitting of geometry/rotation.hpp; omega is derived from (q, L) for the contacts.
     const double h = 0.5 * spec_.time_step;
+    // One rotation matrix per body and step: it turns L into the body frame for the free
+    // rotation (bodies eight at a time in vector lanes), is then replaced by that of the new q,
+    // and gives omega (no quaternion-vector products).
     for (const std::uint32_t i : bodies_) {
         geometry::kick_angular_momentum(p_.ang_mom[i], p_.torque[i], h);
-        if (drift) {
-            geometry::free_rotate(p_.q[i], p_.ang_mom[i], p_.inertia[i], spec_.time_step);
+    }
+    if (drift) {
+        geometry::free_rotate_bodies(bodies_.data(), bodies_.size(), p_.q.data(), rot_.data(),
+                                     p_.ang_mom.data(), p_.inertia.data(), spec_.time_step);
+        for (const std::uint32_t i : bodies_) {
+            rot_[i] = geometry::unit_rotation_matrix(p_.q[i]);
         }
-        p_.omega[i] = geometry::angular_velocity_world(p_.q[i], p_.ang_mom[i], p_.inertia[i]);
+    }
+    for (const std::uint32_t i : bodies_) {
+        p_.omega[i] = geometry::angular_velocity_world(rot_[i], p_.ang_mom[i], p_.inertia[i]);
     }
 }
 
+void System::rekey_body_contacts() {
+    // Groups of the evaluation order of body_forces(): pairs {0, list entry, 0, element of a},
+    // plane walls {1, particle, wall, element}, mesh walls {2, mesh wall, particle, element}. A
+    // record whose pair left the list (it cannot be touching) is dropped.
+    body_groups_.clear();
+    if (body_contacts_.empty()) {
+        return;
+    }
+    constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
+    std::int64_t max_id = 0;
+    for (const std::int64_t id : p_.id) {
+        max_id = std::max(max_id, id);
+    }
+    std::vector<std::uint32_t> index(static_cast<std::size_t>(max_id) + 1, none);
+    for (std::size_t i = 0; i < p_.size(); ++i) {
+        index[static_cast<std::size_t>(p_.id[i])] = static_cast<std::uint32_t>(i);
+    }
+    const auto index_of = [&](std::int64_t id) {
+        return id >= 0 && id <= max_id ? index[static_cast<std::size_t>(id)] : none;
+    };
+    const auto& offsets = nl_.offsets();
+    const auto& nb = nl_.partners();
+    const auto entry_of = [&](std::uint32_t i, std::uint32_t j) {
+        for (std::uint32_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+            if (nb[k] == j) {
+                return k;
+            }
+        }
+        return none;
+    };
+    const auto n_walls = static_cast<std::int64_t>(spec_.walls.size());
+    std::vector<std::pair<ContactGroup, std::uint32_t>> order;
+    order.reserve(body_contacts_.size());
+    for (std::size_t r = 0; r < body_contacts_.size(); ++r) {
+        const BodyContactKey& key = body_contacts_[r].key;
+        const std::uint32_t ia = index_of(key.a);
+        if (ia == none) {
+            continue;
+        }
+        const auto ea = static_cast<std::uint32_t>(key.ea);
+        ContactGroup g{};
+        if (key.b >= 0) {
+            const std::uint32_t ib = index_of(key.b);
+            std::uint32_t k = ib == none ? none : entry_of(ia, ib);
+            k = k == none && ib != none ? entry_of(ib, ia) : k;
+            if (k == none) {
+                continue;
+            }
+            g = {0, k, 0, ea};
+        } else if (-1 - key.b < n_walls) {
+            g = {1, ia, static_cast<std::uint32_t>(-1 - key.b), ea};
+        } else {
+            g = {2, static_cast<std::uint32_t>(-1 - key.b - n_walls), ia, ea};
+        }
+        order.emplace_back(g, static_cast<std::uint32_t>(r));
+    }
+    std::stable_sort(order.begin(), order.end(),
+                     [](const auto& l, const auto& r) { return l.first < r.first; });
+    next_contacts_.clear();
+    for (const auto& [g, r] : order) {
+        next_contacts_.push_back(body_contacts_[r]);
+        body_groups_.push_back(g);
+    }
+    body_contacts_.swap(next_contacts_);
+}
+
 void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
-    std::map<BodyContactKey, BodyContact> next;
+    next_contacts_.clear();
+    next_groups_.clear();
+    // Last step's records are met in the order they were stored: `cursor` only moves forward.
+    std::size_t cursor = 0;
+    const auto find_old = [&](const ContactGroup& g, std::int32_t eb) -> const BodyContact* {
+        while (cursor < body_groups_.size() && body_groups_[cursor] < g) {
+            ++cursor;
+        }
+        for (std::size_t r = cursor; r < body_groups_.size() && body_groups_[r] == g; ++r) {
+            if (body_contacts_[r].key.eb == eb) {
+                return &body_contacts_[r].contact;
+            }
+        }
+        return nullptr;
+    };
     const double dt = spec_.time_step;
     const auto tmpl = [&](std::uint32_t i) -> const geometry::ShapeTemplate* {
         return p_.shape[i] >= 0 ? &spec_.shapes[static_cast<std::size_t>(p_.shape[i])] : nullptr;
@@ -52,7 +141,12 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             p_.shape[i] >= 0 && !poly_features_[static_cast<std::size_t>(p_.shape[i])].edges.empty()
                 ? &poly_features_[static_cast<std::size_t>(p_.shape[i])]
                 : nullptr;
-        append_elements(tmpl(static_cast<std::uint32_t>(i)), features, p_.x[i], p_.q[i],
+        if (p_.shape[i] < 0) { // a sphere
+            elements_.push_back({Element::Kind::sphere, p_.x[i], p_.radius[i], nullptr,
+                                 Quat::Identity(), p_.radius[i]});
+            continue;
+        }
+        append_elements(tmpl(static_cast<std::uint32_t>(i)), features, p_.x[i], p_.q[i], rot_[i],
                         p_.radius[i], elements_);
     }
     element_begin_[p_.size()] = static_cast<std::uint32_t>(elements_.size());
@@ -61,13 +155,12 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
         [&](const auto& law) {
             // One element contact: the law at the contact point with the velocity of that point;
             // force on a, reaction on b (b < 0: a wall, at rest with infinite mass).
-            // `it`: the contact's entry of the last step, or body_contacts_.end() (a new one).
-            // A kept contact moves its map node into `next` (no allocation per contact-step).
-            using Iter = std::map<BodyContactKey, BodyContact>::iterator;
+            // `old`: the contact's record of the last step, or nullptr (a new one); the record of
+            // this step is appended to the next table under group `g`.
             const auto apply = [&](std::uint32_t a, long b, const BodyContactKey& key,
-                                   const ElementContact& ec, Iter it, int material_b, double ratio,
+                                   const ContactGroup& g, const ElementContact& ec,
+                                   const BodyContact* old, int material_b, double ratio,
                                    ChunkTotals& t) {
-                const BodyContact* old = it == body_contacts_.end() ? nullptr : &it->second;
                 const Vec3 ra = ec.point - p_.x[a];
                 Vec3 v_rel = p_.v[a] + p_.omega[a].cross(ra);
                 double m_eff = p_.mass[a];
@@ -98,17 +191,95 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     p_.force[j] -= out.force;
                     p_.torque[j] += out.torque_j - rb.cross(out.force);
                 }
-                const BodyContact now{shear, ec.normal, ec.point, ec.overlap, r_eff, out.force};
-                if (old != nullptr) {
-                    auto node = body_contacts_.extract(it);
-                    node.mapped() = now;
-                    next.insert(next.end(), std::move(node));
-                } else {
-                    next.emplace_hint(next.end(), key, now);
-                }
+                next_contacts_.push_back(
+                    {key, BodyContact{shear, ec.normal, ec.point, ec.overlap, r_eff, out.force}});
+                next_groups_.push_back(g);
                 t.energy += out.elastic_energy;
                 t.max_ratio = std::max(t.max_ratio, ratio);
                 ++t.contacts;
+            };
+
+            // Two sphere elements (clump members, spheres): the sphere-sphere geometry here, the
+            // law in blocks of `block` contacts through the vectorised kernel of the sphere loop
+            // (contact_law.hpp), then forces and torques about each body's centre of mass added
+            // in the order the contacts were met. The record's slot in the next table is taken
+            // when the contact is met, so the table keeps its order.
+            constexpr std::size_t block = 16;
+            contact::ContactBlock<block> cb;
+            std::uint32_t q_a[block], q_b[block], q_slot[block];
+            Vec3 q_ra[block], q_rb[block];
+            double q_ratio[block];
+            std::size_t queued = 0;
+            const double fn_floor = contact::floor_of(spec_.contact);
+            const double rolling = contact::rolling_of(spec_.contact);
+            for (std::size_t q = 0; q < block; ++q) {
+                cb.lever_i[q] = 0.0; // v is already the velocity of the contact point
+                cb.lever_j[q] = 0.0;
+            }
+            const auto flush = [&] {
+#pragma omp simd
+                for (std::size_t q = 0; q < queued; ++q) {
+                    contact::evaluate_block(law, fn_floor, rolling, cb, q, dt);
+                }
+                for (std::size_t q = 0; q < queued; ++q) {
+                    const std::uint32_t a = q_a[q];
+                    const std::uint32_t b = q_b[q];
+                    const Vec3 f(cb.f[0][q], cb.f[1][q], cb.f[2][q]);
+                    p_.force[a] += f;
+                    p_.torque[a] += q_ra[q].cross(f) + Vec3(cb.ti[0][q], cb.ti[1][q], cb.ti[2][q]);
+                    p_.force[b] -= f;
+                    p_.torque[b] += Vec3(cb.tj[0][q], cb.tj[1][q], cb.tj[2][q]) - q_rb[q].cross(f);
+                    BodyContact& rec = next_contacts_[q_slot[q]].contact;
+                    rec.shear = Vec3(cb.s[0][q], cb.s[1][q], cb.s[2][q]);
+                    rec.force = f;
+                    pair_totals.energy += cb.energy[q];
+                    pair_totals.max_ratio = std::max(pair_totals.max_ratio, q_ratio[q]);
+                    ++pair_totals.contacts;
+                }
+                queued = 0;
+            };
+            // Queues the contact of sphere elements A (of a) and B (of b), centres closer than the
+            // sum of their radii (and distinct).
+            const auto queue_spheres = [&](std::uint32_t a, std::uint32_t b, const Element& A,
+                                           const Element& B, const BodyContactKey& key,
+                                           const ContactGroup& g, const BodyContact* old) {
+                const Vec3 d = A.centre - B.centre;
+                const double dist = d.norm();
+                const double rsum = A.radius + B.radius;
+                const double overlap = rsum - dist;
+                const Vec3 n = d / dist;
+                const Vec3 point = B.centre + (B.radius - 0.5 * overlap) * n;
+                const double r_geo = A.radius * B.radius / rsum;
+                const double r_eff =
+                    first_touch && old != nullptr && old->r_eff > 0.0 ? old->r_eff : r_geo;
+                const Vec3 ra = point - p_.x[a];
+                const Vec3 rb = point - p_.x[b];
+                const Vec3 v_rel =
+                    p_.v[a] + p_.omega[a].cross(ra) - p_.v[b] - p_.omega[b].cross(rb);
+                const std::size_t q = queued;
+                for (int c = 0; c < 3; ++c) {
+                    cb.n[c][q] = n[c];
+                    cb.v[c][q] = v_rel[c];
+                    cb.wi[c][q] = p_.omega[a][c];
+                    cb.wj[c][q] = p_.omega[b][c];
+                    cb.s[c][q] = old != nullptr ? old->shear[c] : 0.0;
+                }
+                cb.overlap[q] = overlap;
+                cb.r_eff[q] = r_eff;
+                cb.m_eff[q] = p_.mass[a] * p_.mass[b] / (p_.mass[a] + p_.mass[b]);
+                cb.set_pair(q, pairs_.at(p_.material[a], p_.material[b]));
+                q_a[q] = a;
+                q_b[q] = b;
+                q_ra[q] = ra;
+                q_rb[q] = rb;
+                q_ratio[q] = overlap / ratio_size(A, &B);
+                q_slot[q] = static_cast<std::uint32_t>(next_contacts_.size());
+                next_contacts_.push_back(
+                    {key, BodyContact{Vec3::Zero(), n, point, overlap, r_eff, Vec3::Zero()}});
+                next_groups_.push_back(g);
+                if (++queued == block) {
+                    flush();
+                }
             };
 
             // Pairs: the particle with the smaller id is a, so keys and histories do not depend
@@ -146,6 +317,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     if ((A.centre - p_.x[b]).squaredNorm() >= rab * rab) {
                         continue;
                     }
+                    const ContactGroup g(0, k, 0, ea - a0);
                     for (const std::uint32_t eb : near_b) {
                         const Element& B = elements_[eb];
                         const double re = A.radius + B.radius;
@@ -155,33 +327,39 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         const BodyContactKey key{p_.id[a], p_.id[b],
                                                  static_cast<std::int32_t>(ea - a0),
                                                  static_cast<std::int32_t>(eb - b0)};
-                        const auto it = body_contacts_.find(key);
+                        const BodyContact* old = find_old(g, key.eb);
                         const bool convex = is_convex(A) || is_convex(B);
-                        // Warm start (convex pairs): the last normal, else the line of centres.
-                        Vec3 warm = Vec3::UnitZ();
-                        if (convex) {
-                            const Vec3 guess = it != body_contacts_.end()
-                                                   ? it->second.normal
-                                                   : Vec3(A.centre - B.centre);
-                            warm = guess.squaredNorm() > 0.0 ? Vec3(guess.normalized()) : warm;
+                        if (!convex) {
+                            if (A.centre != B.centre) { // coincident centres: no normal
+                                queue_spheres(a, b, A, B, key, g, old);
+                            }
+                            continue;
                         }
+                        // Warm start: the last normal, else the line of centres.
+                        const Vec3 guess = old != nullptr ? old->normal : Vec3(A.centre - B.centre);
+                        const Vec3 warm =
+                            guess.squaredNorm() > 0.0 ? Vec3(guess.normalized()) : Vec3::UnitZ();
                         const ElementContact ec = element_contact(A, B, spec_.narrow_phase, &warm);
-                        if (convex) {
-                            ++np_.calls;
-                            np_.fallbacks += ec.fell_back ? 1 : 0;
-                            np_.failures += ec.converged ? 0 : 1;
-                        }
+                        ++np_.calls;
+                        np_.fallbacks += ec.fell_back ? 1 : 0;
+                        np_.failures += ec.converged ? 0 : 1;
                         if (ec.touching) {
-                            apply(a, b, key, ec, it, p_.material[b], ec.overlap / ratio_size(A, &B),
-                                  pair_totals);
+                            apply(a, b, key, g, ec, old, p_.material[b],
+                                  ec.overlap / ratio_size(A, &B), pair_totals);
                         }
                     }
                 }
             }
 
-            // Walls, body by body and wall by wall.
-            for (const std::uint32_t a : bodies_) {
-                for (std::size_t w = 0; w < spec_.walls.size(); ++w) {
+            flush();
+
+            // Walls, body by body and wall by wall: only those within the skin at the last list
+            // build can be reached (as for spheres, find_wall_candidates).
+            for (std::size_t bi = 0; bi < bodies_.size(); ++bi) {
+                const std::uint32_t a = bodies_[bi];
+                for (std::uint32_t c = body_wall_offsets_[bi]; c < body_wall_offsets_[bi + 1];
+                     ++c) {
+                    const std::uint32_t w = body_walls_[c];
                     const WallShape& ws = spec_.walls[w].shape;
                     const WallContact bound = std::visit(
                         [&](const auto& s) { return wall_contact(s, p_.x[a], p_.radius[a]); }, ws);
@@ -196,8 +374,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         }
                         const BodyContactKey key{p_.id[a], -1 - static_cast<std::int64_t>(w),
                                                  static_cast<std::int32_t>(ea - a0), 0};
-                        const auto it = body_contacts_.find(key);
-                        apply(a, -1, key, ec, it, spec_.walls[w].material,
+                        const ContactGroup g{1, a, static_cast<std::uint32_t>(w), ea - a0};
+                        apply(a, -1, key, g, ec, find_old(g, key.eb), spec_.walls[w].material,
                               ec.overlap / ratio_size(elements_[ea], nullptr), wall_totals);
                     }
                 }
@@ -234,8 +412,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                                 p_.id[a], -1 - n_walls - static_cast<std::int64_t>(m),
                                 static_cast<std::int32_t>(ea - a0),
                                 (static_cast<std::int32_t>(mc.feature) << 28) | mc.id};
-                            const auto it = body_contacts_.find(key);
-                            apply(a, -1, key, ec, it, mw.material,
+                            const ContactGroup g{2, static_cast<std::uint32_t>(m), a, ea - a0};
+                            apply(a, -1, key, g, ec, find_old(g, key.eb), mw.material,
                                   ec.overlap / ratio_size(A, nullptr), wall_totals);
                         }
                     }
@@ -243,7 +421,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             }
         },
         spec_.contact.law);
-    body_contacts_.swap(next);
+    body_contacts_.swap(next_contacts_);
+    body_groups_.swap(next_groups_);
 }
 
 } // namespace kiln::dynamics

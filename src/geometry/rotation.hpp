@@ -28,10 +28,16 @@
 
 #include "core/types.hpp"
 
+#include <cstddef>
+#include <cstdint>
+
 namespace kiln::geometry {
 
 /// Rotation matrix R(q) of a quaternion (normalised first); maps body-frame vectors to world.
 [[nodiscard]] Mat3 rotation_matrix(const Quat& q);
+
+/// Rotation matrix R(q) of a quaternion already of unit norm (not normalised again; body -> world).
+[[nodiscard]] Mat3 unit_rotation_matrix(const Quat& q);
 
 /// World-frame vector of a body-frame vector v_body under orientation q (body -> world).
 [[nodiscard]] inline Vec3 body_to_world(const Quat& q, const Vec3& v_body) {
@@ -66,6 +72,29 @@ inline void kick_angular_momentum(Vec3& L_world, const Vec3& torque_world, doubl
 /// under free rotation and is therefore not an argument to modify. Inertia in the body frame
 /// (kg m^2, all > 0).
 void free_rotate(Quat& q, const Vec3& L_world, const Vec3& inertia_principal, double dt);
+
+/// As above for a body whose rotation matrix is kept alongside q: `rot` is R(q) (body -> world)
+/// on entry and unit_rotation_matrix of the new (normalised) q on exit. The same splitting, with
+/// each single-axis factor applied component by component and the sine and cosine of small
+/// angles from a series accurate to round-off (no library call in the usual case): the form the
+/// step loop uses for every body.
+void free_rotate(Quat& q, Mat3& rot, const Vec3& L_world, const Vec3& inertia_principal, double dt);
+
+/// free_rotate for the bodies index[0 .. n) of particle arrays: q (body -> world, updated and
+/// renormalised), rot = R(q) on entry (not updated: take unit_rotation_matrix of the new q), world
+/// angular momenta (kg m^2/s) and principal moments (kg m^2, body frame). Bodies are turned eight
+/// at a time in vector lanes; the same splitting and series as free_rotate, a body turning faster
+/// than the series allows taking the general path.
+void free_rotate_bodies(const std::uint32_t* index, std::size_t n, Quat* q, const Mat3* rot,
+                        const Vec3* L_world, const Vec3* inertia_principal, double dt);
+
+/// Angular velocity in the world frame (rad/s) from rot = R(q) (body -> world), the world angular
+/// momentum (kg m^2/s) and the principal moments (kg m^2, body frame): R diag(1/I) R^T L.
+[[nodiscard]] inline Vec3 angular_velocity_world(const Mat3& rot, const Vec3& L_world,
+                                                 const Vec3& inertia_principal) {
+    const Vec3 l_body = rot.transpose() * L_world;
+    return rot * l_body.cwiseQuotient(inertia_principal);
+}
 
 /// One full velocity-Verlet rotation step with a constant torque over the step (used by tests and
 /// validation; System will call kick / free_rotate / kick around its force computation).

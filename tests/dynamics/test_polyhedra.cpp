@@ -435,9 +435,11 @@ TEST(Polyhedra, GjkEpaFindsTheContactsOfACommonPlaneBed) {
     // The common plane is the exact MTD; EPA's overlap along its own normal is an upper bound (to
     // round-off). In this bed it lies above by more than 0.1 % in about half the pairs, by at most
     // 4.5-6 % (libccd stops EPA on a nearly, not exactly, optimal face: its normal is off by ~1e-3
-    // rad in shallow, nearly flat contacts). Bound: 30 %, the largest seen in an earlier bed.
+    // rad in shallow, nearly flat contacts). The worst pair is a matter of the bed's chaotic
+    // configuration: 30 % in an earlier bed, 32.6 % after the free rotation of issue 6 (one
+    // rotation matrix per body, series sine) changed the poses at round-off level. Bound: 40 %.
     EXPECT_GT(lowest, -1e-9);
-    EXPECT_LT(worst, 0.3);
+    EXPECT_LT(worst, 0.4);
 }
 
 } // namespace
