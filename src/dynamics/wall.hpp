@@ -5,6 +5,7 @@
 #include "core/types.hpp"
 #include "geometry/mesh_wall.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -55,7 +56,11 @@ inline WallContact wall_contact(const PlaneWall& w, const Vec3& x, double r) {
     return {w.normal, r - d, r};
 }
 
-/// Contact of a sphere inside a cylinder. The concave wall gives 1/R* = 1/r - 1/R_cyl.
+/// Contact of a sphere inside a cylinder. R*: the Hertz equivalent radius of the relative
+/// curvatures 1/r along the axis and 1/r - 1/R_cyl around it (the wall is concave around only),
+/// R* = 1/sqrt(k1 k2) = r / sqrt(1 - r/R_cyl) (Johnson 1985, Contact Mechanics, Sec. 4.2: R_e =
+/// sqrt(R' R'')); the smaller relative curvature is kept at or above 1/(2r), as the body rule
+/// does for a superquadric (docs/theory/contact.md, "Walls").
 inline WallContact wall_contact(const CylinderWall& w, const Vec3& x, double r) {
     Vec3 rho = x - w.axis_point;
     rho -= rho.dot(w.axis) * w.axis;
@@ -64,7 +69,7 @@ inline WallContact wall_contact(const CylinderWall& w, const Vec3& x, double r) 
         return {Vec3::UnitX(), -1.0, r};
     }
     const double gap = w.radius - dist;
-    const double r_eff = r < w.radius ? r * w.radius / (w.radius - r) : r;
+    const double r_eff = r / std::sqrt(std::max(1.0 - r / w.radius, 0.5));
     return {-rho / dist, r - gap, r_eff};
 }
 

@@ -114,12 +114,50 @@ Vec3 Superquadric::parametric_point(double eta, double omega) const {
             half_axes.z() * spow(std::sin(eta), e1)};
 }
 
+namespace {
+/// x^a for x >= 0 and the exponents a = 1/(n - 1) and -1/n of a support point (n = 2/e): roots the
+/// common exponents take without libm's pow (e = 1, 2/3, 0.5, 0.8, 0.2 give a = 1, 1/2, 1/3,
+/// 2/3, 1/9; -1/n = -1/4 for e = 0.5), std::pow otherwise. An exponent within 1e-14 of a special
+/// value counts as that value (2/e is not exact in binary): the relative change of x^a,
+/// |da ln x|, stays below 1e-12 for every x >= 1e-308.
+double support_pow(double x, double a) {
+    constexpr double kSame = 1e-15;
+    if (std::abs(a - 1.0) < kSame) {
+        return x;
+    }
+    if (std::abs(a - 0.5) < kSame) {
+        return std::sqrt(x);
+    }
+    if (std::abs(a - 1.0 / 3.0) < kSame) {
+        return std::cbrt(x);
+    }
+    if (std::abs(a - 2.0 / 3.0) < kSame) {
+        const double c = std::cbrt(x);
+        return c * c;
+    }
+    if (std::abs(a - 1.0 / 9.0) < kSame) {
+        return std::cbrt(std::cbrt(x));
+    }
+    if (std::abs(a + 0.25) < kSame) {
+        return 1.0 / std::sqrt(std::sqrt(x));
+    }
+    if (std::abs(a + 0.5) < kSame) {
+        return 1.0 / std::sqrt(x);
+    }
+    return std::pow(x, a);
+}
+} // namespace
+
 Vec3 Superquadric::support(const Vec3& d) const {
     // grad F parallel to d in the first octant (signs restored at the end); with n1 = 2/e2,
     // n2 = 2/e1 and lengths scaled by the largest half-axis (the support point scales linearly):
     //   u = t p, v = t q, w = s r, p = (a dx)^(1/(n1-1)), q = (b dy)^(1/(n1-1)),
     //   r = (c dz)^(1/(n2-1)), t = s P^(-(n2/n1-1)/(n2-1)), P = p^n1 + q^n1,
     //   s = (P^(n2 (n1-1) / (n1 (n2-1))) + r^n2)^(-1/n2).
+    // Fewer powers by exact identities: p^n1 = p (a dx) (as n1/(n1-1) = 1 + 1/(n1-1)), likewise
+    // q^n1 and r^n2, and P^(n2 (n1-1) / (n1 (n2-1))) = P P^kappa with kappa = -(n2/n1-1)/(n2-1)
+    // (the two exponents differ by exactly 1); kappa = 0 when e1 = e2. Five powers instead of
+    // nine, and support_pow takes the common exponents as roots (docs/performance.md).
     KILN_ASSERT(d.squaredNorm() > 0.0);
     if (e1 == 1.0 && e2 == 1.0) {
         // Ellipsoid (and sphere): A^2 d / |A d| with A = diag(a, b, c), no powers needed.
@@ -131,14 +169,20 @@ Vec3 Superquadric::support(const Vec3& d) const {
     const Vec3 dn = d.cwiseAbs() / d.cwiseAbs().maxCoeff();
     const double n1 = 2.0 / e2;
     const double n2 = 2.0 / e1;
-    const double p = std::pow(h.x() * dn.x(), 1.0 / (n1 - 1.0));
-    const double q = std::pow(h.y() * dn.y(), 1.0 / (n1 - 1.0));
-    const double r = std::pow(h.z() * dn.z(), 1.0 / (n2 - 1.0));
-    const double big_p = std::pow(p, n1) + std::pow(q, n1);
-    const double g = (big_p > 0.0 ? std::pow(big_p, n2 * (n1 - 1.0) / (n1 * (n2 - 1.0))) : 0.0) +
-                     std::pow(r, n2);
-    const double s = std::pow(g, -1.0 / n2);
-    const double t = big_p > 0.0 ? s * std::pow(big_p, -(n2 / n1 - 1.0) / (n2 - 1.0)) : 0.0;
+    const double a1 = 1.0 / (n1 - 1.0);
+    const double a2 = 1.0 / (n2 - 1.0);
+    const double hx = h.x() * dn.x();
+    const double hy = h.y() * dn.y();
+    const double hz = h.z() * dn.z();
+    const double p = support_pow(hx, a1);
+    const double q = support_pow(hy, a1);
+    const double r = support_pow(hz, a2);
+    const double big_p = p * hx + q * hy;
+    const double kappa = -(n2 / n1 - 1.0) * a2;
+    const double pk = big_p > 0.0 && kappa != 0.0 ? support_pow(big_p, kappa) : 1.0;
+    const double g = (big_p > 0.0 ? big_p * pk : 0.0) + r * hz;
+    const double s = support_pow(g, -1.0 / n2);
+    const double t = big_p > 0.0 ? s * pk : 0.0;
     return scale *
            Vec3(sgn(d.x()) * h.x() * t * p, sgn(d.y()) * h.y() * t * q, sgn(d.z()) * h.z() * s * r);
 }

@@ -4,9 +4,11 @@
 #include "dynamics/body_contact.hpp"
 #include "geometry/clump.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <gtest/gtest.h>
 #include <numbers>
+#include <vector>
 
 namespace kiln::dynamics {
 namespace {
@@ -111,6 +113,34 @@ TEST(BodyRolling, SuperquadricInsideACylinderWallFeelsTheConcaveCurvature) {
     const ElementContact flat =
         element_wall_contact(e[0], PlaneWall{Vec3(wall, 0, 0), Vec3(-1, 0, 0)});
     EXPECT_NEAR(flat.r_eff / r, 1.0, curvature_rounding);
+}
+
+TEST(BodyRolling, SphereInsideACylinderWallGetsTheBodyRuleRadius) {
+    // The sphere kernel's cylinder rule (also used by clump members) is the body rule for a sphere:
+    // R* = 1/sqrt(1/r (1/r - 1/R)) = 2.58 mm for r = 2 mm in R = 5 mm (Johnson 1985, Sec. 4.2),
+    // not 1/(1/r - 1/R) = 3.33 mm; in a tube narrower than 2r the smaller relative curvature is
+    // floored at 1/(2r) on both paths. Checked against the superquadric sphere at the same place.
+    constexpr double r = 2e-3;
+    const geometry::ShapeTemplate t = superquadric(Vec3::Constant(r), 1.0, 1.0);
+    constexpr double curvature_rounding = 1e-6; // relative; curvature tensor of the implicit form
+    for (const double wall : {5e-3, 3e-3, 20e-3}) {
+        const CylinderWall cyl{Vec3::Zero(), Vec3::UnitZ(), wall};
+        const Vec3 x(wall - r + 1e-6, 0, 0);
+        const WallContact sphere = wall_contact(cyl, x, r);
+        std::vector<Element> e;
+        append_elements(&t, x, Quat::Identity(), t.bounding_radius(), e);
+        const ElementContact body = element_wall_contact(e[0], cyl);
+        ASSERT_TRUE(body.touching);
+        // The body rule floors at 1/(2L), L its bounding radius, which carries a 1e-3 margin.
+        constexpr double margin = 1e-3;
+        EXPECT_NEAR(sphere.r_eff / body.r_eff, 1.0, wall < 2.0 * r ? margin : curvature_rounding)
+            << "R = " << wall;
+        const double expected = 1.0 / std::sqrt(1.0 / r * std::max(1.0 / r - 1.0 / wall, 0.5 / r));
+        EXPECT_NEAR(sphere.r_eff / expected, 1.0, 1e-14) << "R = " << wall; // closed form
+    }
+    EXPECT_NEAR(
+        wall_contact(CylinderWall{Vec3::Zero(), Vec3::UnitZ(), 5e-3}, Vec3(3e-3, 0, 0), r).r_eff,
+        2e-3 * std::sqrt(5.0 / 3.0), 1e-15);
 }
 
 TEST(BodyRolling, EllipsoidInsideACylinderWallUsesItsOwnCurvatures) {

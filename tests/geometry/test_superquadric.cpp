@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <numbers>
 #include <random>
+#include <vector>
 
 using kiln::Mat3;
 using kiln::Vec3;
@@ -147,6 +148,53 @@ TEST(Superquadric, SupportMapBeatsBruteForceOverSurfaceSamples) {
             EXPECT_GE(d.dot(s), brute - 1e-12) << e1 << " " << e2;
             constexpr double kSamplingGap = 2e-3; // O(spacing^2 / radius) for pi/300 spacing
             EXPECT_LT(d.dot(s) - brute, kSamplingGap) << e1 << " " << e2;
+        }
+    }
+}
+
+/// The support point by the closed form with nine std::pow calls (the form before the fast path).
+Vec3 support_by_pow(const g::Superquadric& sq, const Vec3& d) {
+    const double scale = sq.half_axes.maxCoeff();
+    const Vec3 h = sq.half_axes / scale;
+    const Vec3 dn = d.cwiseAbs() / d.cwiseAbs().maxCoeff();
+    const double n1 = 2.0 / sq.e2;
+    const double n2 = 2.0 / sq.e1;
+    const double p = std::pow(h.x() * dn.x(), 1.0 / (n1 - 1.0));
+    const double q = std::pow(h.y() * dn.y(), 1.0 / (n1 - 1.0));
+    const double r = std::pow(h.z() * dn.z(), 1.0 / (n2 - 1.0));
+    const double big_p = std::pow(p, n1) + std::pow(q, n1);
+    const double gg = (big_p > 0.0 ? std::pow(big_p, n2 * (n1 - 1.0) / (n1 * (n2 - 1.0))) : 0.0) +
+                      std::pow(r, n2);
+    const double s = std::pow(gg, -1.0 / n2);
+    const double t = big_p > 0.0 ? s * std::pow(big_p, -(n2 / n1 - 1.0) / (n2 - 1.0)) : 0.0;
+    const auto sg = [](double v) { return v < 0.0 ? -1.0 : 1.0; };
+    return scale *
+           Vec3(sg(d.x()) * h.x() * t * p, sg(d.y()) * h.y() * t * q, sg(d.z()) * h.z() * s * r);
+}
+
+TEST(Superquadric, SupportFastPathMatchesThePowForm) {
+    // The support map saves powers by exact identities and takes the common exponents as roots;
+    // it must agree with the plain closed form to round-off (issue 6: results unchanged beyond
+    // 1e-12 relative). Exponents with fast paths (1, 2/3, 0.5, 0.8, 0.2 and pairs) and without,
+    // directions at random and along axes, faces and edges (components 0 and tiny).
+    std::mt19937_64 rng(17);
+    std::normal_distribution<double> nd;
+    std::vector<Vec3> dirs{Vec3(1, 0, 0),  Vec3(0, 1, 0),          Vec3(0, 0, -1),   Vec3(1, 1, 0),
+                           Vec3(0, -1, 1), Vec3(1, 1e-200, 1e-30), Vec3(1e-9, 1, -1)};
+    for (int t = 0; t < 400; ++t) {
+        dirs.emplace_back(nd(rng), nd(rng), nd(rng));
+    }
+    constexpr double kRoundOff = 1e-12; // relative to the largest half-axis
+    for (const auto& [e1, e2] :
+         {std::pair{0.5, 0.5}, std::pair{2.0 / 3.0, 2.0 / 3.0}, std::pair{0.2, 1.0},
+          std::pair{0.8, 0.8}, std::pair{0.3, 0.3}, std::pair{0.2, 0.2}, std::pair{1.0, 0.5},
+          std::pair{0.5, 1.0}, std::pair{0.1, 1.9}, std::pair{1.6, 0.5}, std::pair{0.7, 0.4}}) {
+        const g::Superquadric q = make(Vec3(1.0e-3, 2.0e-3, 0.5e-3), e1, e2);
+        for (const Vec3& d : dirs) {
+            const Vec3 fast = q.support(d);
+            const Vec3 ref = support_by_pow(q, d);
+            EXPECT_LT((fast - ref).norm() / 2.0e-3, kRoundOff)
+                << "e1 " << e1 << " e2 " << e2 << " d " << d.transpose();
         }
     }
 }
