@@ -7,7 +7,6 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/convex_hull_3.h>
-#include <array>
 #include <fmt/format.h>
 #include <map>
 
@@ -33,29 +32,24 @@ template <class F> std::size_t farthest(const std::vector<Vec3>& pts, F&& dist, 
     return best;
 }
 
-/// Refuses input without four affinely independent points (relative to its extent). Returns the
-/// indices of three of them spanning a wide triangle (the input's diameter and the point farthest
-/// from that line).
-std::array<std::size_t, 3> check_not_flat(const std::vector<Vec3>& pts, const std::string& where) {
+/// Refuses input without four affinely independent points (relative to its extent).
+void check_not_flat(const std::vector<Vec3>& pts, const std::string& where) {
     if (pts.size() < 4) {
         throw InputError(fmt::format("{}: a polyhedron needs at least 4 points, the input has {}",
                                      where, pts.size()));
     }
     double d = 0.0;
-    const std::size_t i0 = farthest(
-        pts, [&](const Vec3& p) { return (p - pts[0]).norm(); }, d);
-    const Vec3 p0 = pts[i0];
-    const std::size_t i1 = farthest(
-        pts, [&](const Vec3& p) { return (p - p0).norm(); }, d);
-    const Vec3 p1 = pts[i1];
+    const Vec3 p0 = pts[farthest(
+        pts, [&](const Vec3& p) { return (p - pts[0]).norm(); }, d)];
+    const Vec3 p1 = pts[farthest(
+        pts, [&](const Vec3& p) { return (p - p0).norm(); }, d)];
     const double extent = d;
     if (!(extent > 0.0)) {
         throw InputError(fmt::format("{}: all {} points coincide", where, pts.size()));
     }
     const Vec3 u = (p1 - p0) / extent;
-    const std::size_t i2 = farthest(
-        pts, [&](const Vec3& p) { return (p - p0).cross(u).norm(); }, d);
-    const Vec3 p2 = pts[i2];
+    const Vec3 p2 = pts[farthest(
+        pts, [&](const Vec3& p) { return (p - p0).cross(u).norm(); }, d)];
     if (d <= kHullFlatTolerance * extent) {
         throw InputError(fmt::format("{}: the points are collinear (no volume)", where));
     }
@@ -68,28 +62,16 @@ std::array<std::size_t, 3> check_not_flat(const std::vector<Vec3>& pts, const st
             "{:.3g} of the extent)",
             where, d / extent));
     }
-    return {i0, i1, i2};
 }
 
 } // namespace
 
 Hull convex_hull(const std::vector<Vec3>& points, const std::string& where) {
-    const std::array<std::size_t, 3> wide = check_not_flat(points, where);
-    // CGAL 5.5's quickhull (Debian 12) starts from the first three distinct, non-collinear input
-    // points; when they span a hull face and a fourth point lies within round-off of that face it
-    // can erase one list node twice (CGAL issues 6543, 8625, 8761: a use after free that corrupts
-    // the heap; found with valgrind on Yade's random polyhedra, bench/yade). The input therefore
-    // starts with a wide triangle through the body (diameter and the point farthest from it),
-    // then the other points in their order.
+    check_not_flat(points, where);
     std::vector<Point> in;
     in.reserve(points.size());
-    for (const std::size_t i : wide) {
-        in.emplace_back(points[i].x(), points[i].y(), points[i].z());
-    }
-    for (std::size_t i = 0; i < points.size(); ++i) {
-        if (i != wide[0] && i != wide[1] && i != wide[2]) {
-            in.emplace_back(points[i].x(), points[i].y(), points[i].z());
-        }
+    for (const Vec3& p : points) {
+        in.emplace_back(p.x(), p.y(), p.z());
     }
     Mesh mesh;
     CGAL::convex_hull_3(in.begin(), in.end(), mesh);
