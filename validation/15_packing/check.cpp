@@ -12,10 +12,13 @@
 #include <cstdlib>
 #include <fmt/format.h>
 #include <fstream>
+#include <future>
 #include <gtest/gtest.h>
 #include <random>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace kiln::validation {
 namespace {
@@ -161,9 +164,26 @@ TEST(Packing, CubicOrderIsOneWhenAlignedAndZeroWhenRandom) {
     EXPECT_NEAR(sum / n, 0.0, 0.01);
 }
 
+/// Pours of (shape, seed) run at the same time, one thread each (seed 0: the case's seed). The
+/// pours are separate systems sharing no state (the narrow phase's scratch is per thread), so the
+/// results are the bits of one pour per process; only the wall time shrinks.
+std::vector<Packing> pour_all(const std::vector<std::pair<std::string, long>>& runs) {
+    std::vector<std::future<Packing>> futures;
+    for (const auto& [shape, seed] : runs) {
+        futures.push_back(std::async(std::launch::async,
+                                     [shape = shape, seed = seed] { return pour(shape, seed); }));
+    }
+    std::vector<Packing> out;
+    for (auto& f : futures) {
+        out.push_back(f.get());
+    }
+    return out;
+}
+
 TEST(Packing, SpheroidsRiseAboveSpheresAsDonev2004) {
     reset_results();
-    const Packing sphere = pour("sphere");
+    const std::vector<Packing> k = pour_all({{"sphere", 0}, {"prolate_15", 0}, {"prolate_20", 0}});
+    const Packing& sphere = k[0];
     record("spheres: solid fraction", sphere.phi, 0.5 * (sphere_low + sphere_high),
            0.5 * (sphere_high - sphere_low), "-");
     EXPECT_GT(sphere.phi, sphere_low);
@@ -173,42 +193,67 @@ TEST(Packing, SpheroidsRiseAboveSpheresAsDonev2004) {
     // Donev et al. 2004, Fig. 2 (spheroids, maximally random jammed): 0.64 for spheres, about 0.70
     // at aspect ratio 1.5 and 0.69 at 2 (read from the figure).
     struct Row {
-        const char* shape;
         const char* label;
         double reference_rise;
     };
-    for (const Row& r : {Row{"prolate_15", "spheroid 1.5:1", 0.70 - 0.64},
-                         Row{"prolate_20", "spheroid 2:1", 0.69 - 0.64}}) {
-        const Packing k = pour(r.shape);
-        record(fmt::format("{}: solid fraction", r.label), k.phi, 0.64 + r.reference_rise,
+    const Row rows[] = {{"spheroid 1.5:1", 0.70 - 0.64}, {"spheroid 2:1", 0.69 - 0.64}};
+    for (std::size_t n = 0; n < 2; ++n) {
+        const Row& r = rows[n];
+        const Packing& p = k[n + 1];
+        record(fmt::format("{}: solid fraction", r.label), p.phi, 0.64 + r.reference_rise,
                rise_tolerance, "-");
-        record(fmt::format("{}: rise over spheres", r.label), k.phi - sphere.phi, r.reference_rise,
+        record(fmt::format("{}: rise over spheres", r.label), p.phi - sphere.phi, r.reference_rise,
                rise_tolerance, "-");
-        EXPECT_NEAR(k.phi - sphere.phi, r.reference_rise, rise_tolerance) << r.label;
-        EXPECT_LT(k.kinetic_per_weight, settled) << r.label;
-        EXPECT_EQ(k.failures, 0) << r.label;
+        EXPECT_NEAR(p.phi - sphere.phi, r.reference_rise, rise_tolerance) << r.label;
+        EXPECT_LT(p.kinetic_per_weight, settled) << r.label;
+        EXPECT_EQ(p.failures, 0) << r.label;
     }
 }
 
+/// Seeds of the m = 4 pours whose mean is compared with Delaney & Cleary's m = 5 value: one pour
+/// scatters by about 0.013 in solid fraction (README, "Seed spread"), as much as the margin.
+constexpr long m4_seeds = 6;
+
 TEST(Packing, SuperballsPackDenserWithBlockiness) {
     // Delaney & Cleary 2010: superballs pack denser the blockier they are, from 0.64 (m = 2/e = 2)
-    // to about 0.82 at m = 5 (partly ordered). Checked: the rise with blockiness, below m = 5's.
-    // The sphere pour is repeated (identical bits) so that this test stands alone.
-    const Packing sphere = pour("sphere");
-    const Packing m3 = pour("superball_067");
-    const Packing m4 = pour("superball_050");
+    // to about 0.82 at m = 5 (partly ordered). Checked: the rise with blockiness, and the mean of
+    // six m = 4 pours (seeds 1-6) below m = 5's value. The sphere pour is repeated (identical bits)
+    // so that this test stands alone.
+    std::vector<std::pair<std::string, long>> runs = {{"sphere", 0}, {"superball_067", 0}};
+    for (long seed = 1; seed <= m4_seeds; ++seed) {
+        runs.emplace_back("superball_050", seed);
+    }
+    const std::vector<Packing> k = pour_all(runs);
+    const Packing& sphere = k[0];
+    const Packing& m3 = k[1];
+    double mean = 0.0;
+    double order = 0.0;
+    for (long seed = 1; seed <= m4_seeds; ++seed) {
+        const Packing& p = k[static_cast<std::size_t>(seed + 1)];
+        record(fmt::format("superball m = 4, seed {}: solid fraction", seed), p.phi, 0.0, 0.0, "-");
+        mean += p.phi / m4_seeds;
+        order += p.order / m4_seeds;
+        EXPECT_LT(p.kinetic_per_weight, settled) << "m = 4, seed " << seed;
+        EXPECT_EQ(p.failures, 0) << "m = 4, seed " << seed;
+    }
+    double var = 0.0;
+    for (long seed = 1; seed <= m4_seeds; ++seed) {
+        const double d = k[static_cast<std::size_t>(seed + 1)].phi - mean;
+        var += d * d / (m4_seeds - 1);
+    }
+    const double standard_error = std::sqrt(var / m4_seeds);
     record("superball m = 3: solid fraction", m3.phi, 0.0, 0.0, "-");
-    record("superball m = 4: solid fraction", m4.phi, 0.0, 0.0, "-");
+    record("superball m = 4: mean solid fraction of 6 seeds", mean, 0.82, 0.0, "-");
+    record("superball m = 4: standard deviation of one pour", std::sqrt(var), 0.0, 0.0, "-");
+    record("superball m = 4: standard error of the mean", standard_error, 0.0, 0.0, "-");
     record("superball m = 3: cubic order against the box (0 random, 1 aligned)", m3.order, 0.0, 0.0,
            "-");
-    record("superball m = 4: cubic order against the box (0 random, 1 aligned)", m4.order, 0.0, 0.0,
-           "-");
+    record("superball m = 4: mean cubic order against the box", order, 0.0, 0.0, "-");
     EXPECT_GT(m3.phi, sphere.phi);
-    EXPECT_GT(m4.phi, m3.phi);
-    EXPECT_LT(m4.phi, 0.82);
+    EXPECT_GT(mean, m3.phi);
+    EXPECT_LT(mean, 0.82);
     EXPECT_LT(m3.kinetic_per_weight, settled);
-    EXPECT_LT(m4.kinetic_per_weight, settled);
-    EXPECT_EQ(m3.failures + m4.failures, 0);
+    EXPECT_EQ(m3.failures, 0);
 }
 
 /// The seed-to-seed spread behind the superball tolerance (README, "Seed spread"): not part of the
