@@ -216,6 +216,7 @@ void System::rebuild_neighbours() {
 void System::index_bodies() {
     bodies_.clear();
     body_entries_.clear();
+    members_valid_ = false; // the list or the particle order changed
     has_bodies_ = false;
     rot_.resize(p_.size());
     for (std::size_t i = 0; i < p_.size(); ++i) {
@@ -632,6 +633,7 @@ void System::compute_forces(bool kick_requested) {
     const std::size_t n = p_.size();
     const std::size_t entries = nl_.partners().size();
     const bool direct = threads_ == 1;
+    const bool no_sphere_pairs = has_bodies_ && body_entries_.size() == entries;
     const std::size_t pair_units = (entries + pair_chunk_size - 1) / pair_chunk_size;
     const std::size_t particle_units = (n + particle_unit_size - 1) / particle_unit_size;
     pair_totals_.assign(pair_units, ChunkTotals{});
@@ -666,6 +668,17 @@ void System::compute_forces(bool kick_requested) {
 #pragma omp for schedule(static)
                 for (std::size_t u = 0; u < pair_units; ++u) {
                     const std::size_t begin = u * pair_chunk_size;
+                    if (no_sphere_pairs) {
+                        // Every entry has a body (body_forces): nothing to evaluate here, and
+                        // their histories in the list stay zero.
+                        if (!direct) {
+                            std::fill(result_row_.begin() + static_cast<std::ptrdiff_t>(begin),
+                                      result_row_.begin() + static_cast<std::ptrdiff_t>(std::min(
+                                                                entries, begin + pair_chunk_size)),
+                                      static_cast<std::uint32_t>(entries));
+                        }
+                        continue;
+                    }
                     const std::size_t end = std::min(entries, begin + pair_chunk_size);
                     if (has_bodies_) {
                         if (direct) {

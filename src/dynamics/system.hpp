@@ -215,6 +215,20 @@ class System {
     bool has_bodies_ = false;
     std::vector<std::uint32_t> bodies_;       // indices of the body particles
     std::vector<std::uint32_t> body_entries_; // list entries with a body on either side
+    // Member pairs (clumps, spheres): the element pairs of body entries whose sphere elements are
+    // within a skin of each other, in the order body_forces() evaluates them (entry, element of
+    // a, element of b; a is the particle with the smaller id). An entry with a non-sphere element
+    // on either side is one item with ea = eb = no_element (evaluated by the general route).
+    // Rebuilt after every list build and when an element has moved more than half a skin since
+    // (rotation included), so no touching member pair is missed between builds.
+    struct MemberPair {
+        std::uint32_t k, a, b, ea, eb; // list entry, particles, elements (indices of elements_)
+    };
+    static constexpr std::uint32_t no_element = 0xffffffffU;
+    std::vector<MemberPair> member_pairs_;
+    std::vector<Vec3> member_x_build_; // element centres when member_pairs_ was built (m, world)
+    bool members_valid_ = false;
+    void build_member_pairs();
     // Walls within the skin of each body at the last list build: those of bodies_[b] are
     // body_walls_[body_wall_offsets_[b] .. body_wall_offsets_[b + 1]), in wall order.
     std::vector<std::uint32_t> body_wall_offsets_, body_walls_;

@@ -110,6 +110,47 @@ void System::rekey_body_contacts() {
     body_contacts_.swap(next_contacts_);
 }
 
+void System::build_member_pairs() {
+    // Elements are posed (body_forces); every body entry becomes its member pairs within a skin, or
+    // one general item when an element of either side is not a sphere.
+    member_pairs_.clear();
+    const auto& nb = nl_.partners();
+    const auto& owner = nl_.owners();
+    const double skin = nl_.skin();
+    const auto all_spheres = [&](std::uint32_t i) {
+        for (std::uint32_t e = element_begin_[i]; e < element_begin_[i + 1]; ++e) {
+            if (elements_[e].kind != Element::Kind::sphere) {
+                return false;
+            }
+        }
+        return true;
+    };
+    for (const std::uint32_t k : body_entries_) {
+        std::uint32_t a = owner[k];
+        std::uint32_t b = nb[k];
+        if (p_.id[a] > p_.id[b]) {
+            std::swap(a, b);
+        }
+        if (!all_spheres(a) || !all_spheres(b)) {
+            member_pairs_.push_back({k, a, b, no_element, no_element});
+            continue;
+        }
+        for (std::uint32_t ea = element_begin_[a]; ea < element_begin_[a + 1]; ++ea) {
+            for (std::uint32_t eb = element_begin_[b]; eb < element_begin_[b + 1]; ++eb) {
+                const double reach = elements_[ea].radius + elements_[eb].radius + skin;
+                if ((elements_[ea].centre - elements_[eb].centre).squaredNorm() < reach * reach) {
+                    member_pairs_.push_back({k, a, b, ea, eb});
+                }
+            }
+        }
+    }
+    member_x_build_.resize(elements_.size());
+    for (std::size_t e = 0; e < elements_.size(); ++e) {
+        member_x_build_[e] = elements_[e].centre;
+    }
+    members_valid_ = true;
+}
+
 void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
     next_contacts_.clear();
     next_groups_.clear();
@@ -153,6 +194,17 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
 
     std::visit(
         [&](const auto& law) {
+            // The one place where an element contact's record of this step is created, in
+            // evaluation order (`old` nullptr: the contact is new this step). Returns its slot in
+            // the next table. Sphere pairs fill their geometry (normal, point, overlap, R*) in at
+            // the flush of their block; every record gets its shear and force there or in apply.
+            const auto record = [&](const BodyContactKey& key, const ContactGroup& g,
+                                    const BodyContact& rec, const BodyContact* old) {
+                static_cast<void>(old); // where a hook on new contacts goes
+                next_contacts_.push_back({key, rec});
+                next_groups_.push_back(g);
+                return static_cast<std::uint32_t>(next_contacts_.size() - 1);
+            };
             // One element contact: the law at the contact point with the velocity of that point;
             // force on a, reaction on b (b < 0: a wall, at rest with infinite mass).
             // `old`: the contact's record of the last step, or nullptr (a new one); the record of
@@ -191,25 +243,36 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     p_.force[j] -= out.force;
                     p_.torque[j] += out.torque_j - rb.cross(out.force);
                 }
-                next_contacts_.push_back(
-                    {key, BodyContact{shear, ec.normal, ec.point, ec.overlap, r_eff, out.force}});
-                next_groups_.push_back(g);
+                record(key, g,
+                       BodyContact{shear, ec.normal, ec.point, ec.overlap, r_eff, out.force}, old);
                 t.energy += out.elastic_energy;
                 t.max_ratio = std::max(t.max_ratio, ratio);
                 ++t.contacts;
             };
 
-            // Two sphere elements (clump members, spheres): the sphere-sphere geometry here, the
-            // law in blocks of `block` contacts through the vectorised kernel of the sphere loop
-            // (contact_law.hpp), then forces and torques about each body's centre of mass added
-            // in the order the contacts were met. The record's slot in the next table is taken
-            // when the contact is met, so the table keeps its order.
+            // Two sphere elements (clump members, spheres), or a sphere element and a plane or
+            // cylinder wall: queued in blocks of `block` contacts. Sphere pairs queue their raw
+            // data (centres, radii, body velocities); the geometry (distance, normal, contact
+            // point, lever arms, velocity of the contact point) is derived in vector lanes, then
+            // the law runs through the vectorised kernel of the sphere loop (contact_law.hpp), and
+            // forces and torques about each body's centre of mass are added in the order the
+            // contacts were met. The record's slot in the next table is taken when the contact is
+            // met, so the table keeps its order; its geometry is filled in at the flush.
             constexpr std::size_t block = 16;
             contact::ContactBlock<block> cb;
             std::uint32_t q_a[block], q_b[block], q_slot[block];
-            Vec3 q_ra[block], q_rb[block];
-            double q_ratio[block];
+            // Raw data of queued sphere pairs (world frame): element centres and radii, body
+            // centres, velocities, masses, R* of the first touch (0: none), ratio scale.
+            double g_ca[3][block], g_cb[3][block], g_xa[3][block], g_xb[3][block];
+            double g_va[3][block], g_vb[3][block];
+            double g_rada[block], g_radb[block], g_ma[block], g_mb[block], g_r0[block],
+                g_size[block];
+            // Geometry of the queued contacts: contact point and lever arms from the centres of
+            // mass (m, world), overlap ratio.
+            double g_p[3][block], g_ra[3][block], g_rb[3][block], q_ratio[block];
             std::size_t queued = 0;
+            bool raw_pairs = true; // the queue holds sphere pairs (raw) or wall contacts (posed)
+            ChunkTotals* queue_totals = &pair_totals; // where flush() counts the queued contacts
             const double fn_floor = contact::floor_of(spec_.contact);
             const double rolling = contact::rolling_of(spec_.contact);
             for (std::size_t q = 0; q < block; ++q) {
@@ -217,6 +280,50 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 cb.lever_j[q] = 0.0;
             }
             const auto flush = [&] {
+                if (raw_pairs) {
+#pragma omp simd
+                    for (std::size_t q = 0; q < queued; ++q) {
+                        const double d0 = g_ca[0][q] - g_cb[0][q];
+                        const double d1 = g_ca[1][q] - g_cb[1][q];
+                        const double d2 = g_ca[2][q] - g_cb[2][q];
+                        const double dist = std::sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+                        const double rsum = g_rada[q] + g_radb[q];
+                        const double overlap = rsum - dist;
+                        const double inv = 1.0 / dist;
+                        const double n[3] = {d0 * inv, d1 * inv, d2 * inv};
+                        const double to_point = g_radb[q] - 0.5 * overlap;
+                        double ra[3], rb[3];
+                        for (int c = 0; c < 3; ++c) {
+                            g_p[c][q] = g_cb[c][q] + to_point * n[c];
+                            ra[c] = g_p[c][q] - g_xa[c][q];
+                            rb[c] = g_p[c][q] - g_xb[c][q];
+                            g_ra[c][q] = ra[c];
+                            g_rb[c][q] = rb[c];
+                            cb.n[c][q] = n[c];
+                        }
+                        const double(&wa)[3][block] = cb.wi;
+                        const double(&wb)[3][block] = cb.wj;
+                        // v_a + w_a x r_a - v_b - w_b x r_b: the velocity of the contact point
+                        cb.v[0][q] = g_va[0][q] + (wa[1][q] * ra[2] - wa[2][q] * ra[1]) -
+                                     g_vb[0][q] - (wb[1][q] * rb[2] - wb[2][q] * rb[1]);
+                        cb.v[1][q] = g_va[1][q] + (wa[2][q] * ra[0] - wa[0][q] * ra[2]) -
+                                     g_vb[1][q] - (wb[2][q] * rb[0] - wb[0][q] * rb[2]);
+                        cb.v[2][q] = g_va[2][q] + (wa[0][q] * ra[1] - wa[1][q] * ra[0]) -
+                                     g_vb[2][q] - (wb[0][q] * rb[1] - wb[1][q] * rb[0]);
+                        cb.overlap[q] = overlap;
+                        const double r_geo = g_rada[q] * g_radb[q] / rsum;
+                        cb.r_eff[q] = g_r0[q] > 0.0 ? g_r0[q] : r_geo;
+                        cb.m_eff[q] = g_ma[q] * g_mb[q] / (g_ma[q] + g_mb[q]);
+                        q_ratio[q] = overlap / g_size[q];
+                    }
+                    for (std::size_t q = 0; q < queued; ++q) {
+                        BodyContact& rec = next_contacts_[q_slot[q]].contact;
+                        rec.normal = Vec3(cb.n[0][q], cb.n[1][q], cb.n[2][q]);
+                        rec.point = Vec3(g_p[0][q], g_p[1][q], g_p[2][q]);
+                        rec.overlap = cb.overlap[q];
+                        rec.r_eff = cb.r_eff[q];
+                    }
+                }
 #pragma omp simd
                 for (std::size_t q = 0; q < queued; ++q) {
                     contact::evaluate_block(law, fn_floor, rolling, cb, q, dt);
@@ -225,77 +332,99 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     const std::uint32_t a = q_a[q];
                     const std::uint32_t b = q_b[q];
                     const Vec3 f(cb.f[0][q], cb.f[1][q], cb.f[2][q]);
+                    const Vec3 ra(g_ra[0][q], g_ra[1][q], g_ra[2][q]);
                     p_.force[a] += f;
-                    p_.torque[a] += q_ra[q].cross(f) + Vec3(cb.ti[0][q], cb.ti[1][q], cb.ti[2][q]);
-                    p_.force[b] -= f;
-                    p_.torque[b] += Vec3(cb.tj[0][q], cb.tj[1][q], cb.tj[2][q]) - q_rb[q].cross(f);
+                    p_.torque[a] += ra.cross(f) + Vec3(cb.ti[0][q], cb.ti[1][q], cb.ti[2][q]);
+                    if (b != no_element) { // a wall takes no reaction
+                        const Vec3 rb(g_rb[0][q], g_rb[1][q], g_rb[2][q]);
+                        p_.force[b] -= f;
+                        p_.torque[b] += Vec3(cb.tj[0][q], cb.tj[1][q], cb.tj[2][q]) - rb.cross(f);
+                    }
                     BodyContact& rec = next_contacts_[q_slot[q]].contact;
                     rec.shear = Vec3(cb.s[0][q], cb.s[1][q], cb.s[2][q]);
                     rec.force = f;
-                    pair_totals.energy += cb.energy[q];
-                    pair_totals.max_ratio = std::max(pair_totals.max_ratio, q_ratio[q]);
-                    ++pair_totals.contacts;
+                    queue_totals->energy += cb.energy[q];
+                    queue_totals->max_ratio = std::max(queue_totals->max_ratio, q_ratio[q]);
+                    ++queue_totals->contacts;
                 }
                 queued = 0;
+            };
+            // Queues the contact of sphere element A of body a with a plane or cylinder wall
+            // (ec: element_wall_contact, touching); walls are at rest with infinite mass. Only
+            // after the sphere pairs are flushed (raw_pairs false).
+            const auto queue_wall = [&](std::uint32_t a, const Element& A, const ElementContact& ec,
+                                        int material_w, const BodyContactKey& key,
+                                        const ContactGroup& g, const BodyContact* old) {
+                const double r_eff =
+                    first_touch && old != nullptr && old->r_eff > 0.0 ? old->r_eff : ec.r_eff;
+                const Vec3 ra = ec.point - p_.x[a];
+                const Vec3 v_rel = p_.v[a] + p_.omega[a].cross(ra);
+                const std::size_t q = queued;
+                for (int c = 0; c < 3; ++c) {
+                    cb.n[c][q] = ec.normal[c];
+                    cb.v[c][q] = v_rel[c];
+                    cb.wi[c][q] = p_.omega[a][c];
+                    cb.wj[c][q] = 0.0;
+                    cb.s[c][q] = old != nullptr ? old->shear[c] : 0.0;
+                    g_ra[c][q] = ra[c];
+                }
+                cb.overlap[q] = ec.overlap;
+                cb.r_eff[q] = r_eff;
+                cb.m_eff[q] = p_.mass[a];
+                cb.set_pair(q, pairs_.at(p_.material[a], material_w));
+                q_a[q] = a;
+                q_b[q] = no_element;
+                q_ratio[q] = ec.overlap / ratio_size(A, nullptr);
+                q_slot[q] = record(
+                    key, g,
+                    BodyContact{Vec3::Zero(), ec.normal, ec.point, ec.overlap, r_eff, Vec3::Zero()},
+                    old);
+                if (++queued == block) {
+                    flush();
+                }
             };
             // Queues the contact of sphere elements A (of a) and B (of b), centres closer than the
             // sum of their radii (and distinct).
             const auto queue_spheres = [&](std::uint32_t a, std::uint32_t b, const Element& A,
                                            const Element& B, const BodyContactKey& key,
                                            const ContactGroup& g, const BodyContact* old) {
-                const Vec3 d = A.centre - B.centre;
-                const double dist = d.norm();
-                const double rsum = A.radius + B.radius;
-                const double overlap = rsum - dist;
-                const Vec3 n = d / dist;
-                const Vec3 point = B.centre + (B.radius - 0.5 * overlap) * n;
-                const double r_geo = A.radius * B.radius / rsum;
-                const double r_eff =
-                    first_touch && old != nullptr && old->r_eff > 0.0 ? old->r_eff : r_geo;
-                const Vec3 ra = point - p_.x[a];
-                const Vec3 rb = point - p_.x[b];
-                const Vec3 v_rel =
-                    p_.v[a] + p_.omega[a].cross(ra) - p_.v[b] - p_.omega[b].cross(rb);
                 const std::size_t q = queued;
                 for (int c = 0; c < 3; ++c) {
-                    cb.n[c][q] = n[c];
-                    cb.v[c][q] = v_rel[c];
+                    g_ca[c][q] = A.centre[c];
+                    g_cb[c][q] = B.centre[c];
+                    g_xa[c][q] = p_.x[a][c];
+                    g_xb[c][q] = p_.x[b][c];
+                    g_va[c][q] = p_.v[a][c];
+                    g_vb[c][q] = p_.v[b][c];
                     cb.wi[c][q] = p_.omega[a][c];
                     cb.wj[c][q] = p_.omega[b][c];
                     cb.s[c][q] = old != nullptr ? old->shear[c] : 0.0;
                 }
-                cb.overlap[q] = overlap;
-                cb.r_eff[q] = r_eff;
-                cb.m_eff[q] = p_.mass[a] * p_.mass[b] / (p_.mass[a] + p_.mass[b]);
+                g_rada[q] = A.radius;
+                g_radb[q] = B.radius;
+                g_ma[q] = p_.mass[a];
+                g_mb[q] = p_.mass[b];
+                // R*: with first_touch, that of the contact's first step (the same for spheres)
+                g_r0[q] = first_touch && old != nullptr ? old->r_eff : 0.0;
+                g_size[q] = ratio_size(A, &B);
                 cb.set_pair(q, pairs_.at(p_.material[a], p_.material[b]));
                 q_a[q] = a;
                 q_b[q] = b;
-                q_ra[q] = ra;
-                q_rb[q] = rb;
-                q_ratio[q] = overlap / ratio_size(A, &B);
-                q_slot[q] = static_cast<std::uint32_t>(next_contacts_.size());
-                next_contacts_.push_back(
-                    {key, BodyContact{Vec3::Zero(), n, point, overlap, r_eff, Vec3::Zero()}});
-                next_groups_.push_back(g);
+                q_slot[q] = record(key, g, BodyContact{}, old);
                 if (++queued == block) {
                     flush();
                 }
             };
 
             // Pairs: the particle with the smaller id is a, so keys and histories do not depend
-            // on the list's owner/partner order.
-            const auto& nb = nl_.partners();
+            // on the list's owner/partner order. The general route for entry k (a and b already
+            // ordered): bounding spheres, the elements of each that reach the other, then every
+            // element pair through the narrow phase (sphere pairs through the queue).
             std::vector<std::uint32_t> near_b;
-            const auto& owner = nl_.owners();
-            for (const std::uint32_t k : body_entries_) {
-                std::uint32_t a = owner[k];
-                std::uint32_t b = nb[k];
+            const auto general_entry = [&](std::uint32_t k, std::uint32_t a, std::uint32_t b) {
                 const double rsum = p_.radius[a] + p_.radius[b];
                 if ((p_.x[a] - p_.x[b]).squaredNorm() >= rsum * rsum) {
-                    continue;
-                }
-                if (p_.id[a] > p_.id[b]) {
-                    std::swap(a, b);
+                    return;
                 }
                 const std::uint32_t a0 = element_begin_[a];
                 const std::uint32_t b0 = element_begin_[b];
@@ -309,7 +438,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     }
                 }
                 if (near_b.empty()) {
-                    continue;
+                    return;
                 }
                 for (std::uint32_t ea = a0; ea < element_begin_[a + 1]; ++ea) {
                     const Element& A = elements_[ea];
@@ -349,9 +478,41 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         }
                     }
                 }
+            };
+
+            // Member pairs in the order of the general route (entry, element of a, element of
+            // b): the same contacts, the same evaluation order and so the same bits, without the
+            // per-step bounding-sphere search inside each clump pair. A touching pair of sphere
+            // elements implies the bounding-sphere tests the general route makes.
+            bool moved = !members_valid_ || member_x_build_.size() != elements_.size();
+            const double half_skin2 = 0.25 * nl_.skin() * nl_.skin();
+            for (std::size_t e = 0; e < elements_.size() && !moved; ++e) {
+                moved = (elements_[e].centre - member_x_build_[e]).squaredNorm() > half_skin2;
+            }
+            if (moved) {
+                build_member_pairs();
+            }
+            for (const MemberPair& m : member_pairs_) {
+                if (m.ea == no_element) {
+                    general_entry(m.k, m.a, m.b);
+                    continue;
+                }
+                const Element& A = elements_[m.ea];
+                const Element& B = elements_[m.eb];
+                const double re = A.radius + B.radius;
+                if ((A.centre - B.centre).squaredNorm() >= re * re || A.centre == B.centre) {
+                    continue; // apart (no history), or coincident centres (no normal)
+                }
+                const std::uint32_t ea = m.ea - element_begin_[m.a];
+                const ContactGroup g(0, m.k, 0, ea);
+                const BodyContactKey key{p_.id[m.a], p_.id[m.b], static_cast<std::int32_t>(ea),
+                                         static_cast<std::int32_t>(m.eb - element_begin_[m.b])};
+                queue_spheres(m.a, m.b, A, B, key, g, find_old(g, key.eb));
             }
 
             flush();
+            raw_pairs = false;
+            queue_totals = &wall_totals;
 
             // Walls, body by body and wall by wall: only those within the skin at the last list
             // build can be reached (as for spheres, find_wall_candidates).
@@ -375,11 +536,17 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         const BodyContactKey key{p_.id[a], -1 - static_cast<std::int64_t>(w),
                                                  static_cast<std::int32_t>(ea - a0), 0};
                         const ContactGroup g{1, a, static_cast<std::uint32_t>(w), ea - a0};
+                        if (elements_[ea].kind == Element::Kind::sphere) {
+                            queue_wall(a, elements_[ea], ec, spec_.walls[w].material, key, g,
+                                       find_old(g, key.eb));
+                            continue;
+                        }
                         apply(a, -1, key, g, ec, find_old(g, key.eb), spec_.walls[w].material,
                               ec.overlap / ratio_size(elements_[ea], nullptr), wall_totals);
                     }
                 }
             }
+            flush();
 
             // Mesh walls, wall by wall and particle by particle (spheres too: a sphere may touch
             // several features, each with its own history keyed by feature kind and id).

@@ -83,6 +83,53 @@ TEST(Bodies, ClumpSettlesOnFloorOnItsSubSpheres) {
     EXPECT_LT(std::acos(std::min(1.0, std::abs((p.q[0] * axis_body).z()))), upright);
 }
 
+TEST(Bodies, SpinningDimerHitsASphereItsCentreNeverApproaches) {
+    // Clump members are found through a member-pair list built with a skin; the centre of this
+    // dimer stays put (no neighbour-list rebuild), so only the rule that rebuilds the member list
+    // when a member has turned by more than half a skin finds the contact.
+    SceneSpec s = base_scene();
+    s.gravity.setZero();
+    const double r = 2e-3; // member radius (m), centres 2 mm apart as the LIGGGHTS dimer
+    s.shapes.push_back(geometry::make_template(
+        "dimer", geometry::make_clump({{Vec3(1e-3, 0, 0), r}, {Vec3(-1e-3, 0, 0), r}}, "dimer")));
+    const auto& c = std::get<geometry::Clump>(s.shapes[0].shape);
+    // Long axis along world x at the start; spin about world z (a principal axis).
+    const Vec3 axis_body = (c.spheres[0].centre - c.spheres[1].centre).normalized();
+    const Vec3 turn = axis_body.cross(Vec3::UnitX()); // zero when it is along +-x already
+    const Quat q0 =
+        turn.norm() < 1e-12
+            ? Quat::Identity()
+            : Quat(Eigen::AngleAxisd(std::atan2(turn.norm(), axis_body.x()), turn.normalized()));
+    const double spin = 500.0; // rad/s: a quarter turn in 3.1 ms, member tips at 1.5 m/s
+    s.particles.push_back(body(0, Vec3::Zero(), Vec3::Zero(), Vec3(0, 0, spin), q0));
+    // A sphere of 1 mm whose surface is 0.74 mm from the members at the start (more than the
+    // default skin of 0.6 mm) and 0.4 mm inside their reach after a quarter turn.
+    const double y = 3.6e-3;
+    s.particles.emplace_back(0, 1e-3, Vec3(0, y, 0), Vec3::Zero(), Vec3::Zero());
+    System sys(s);
+    const double reach = std::hypot(1e-3, y) - r - 1e-3;
+    ASSERT_GT(reach, 0.2 * 3e-3); // apart by more than the skin at the start
+    const Vec3 p0 = momentum(sys);
+    sys.step();
+    const long builds = sys.neighbour_builds();
+    long builds_at_touch = -1;
+    for (int k = 0; k < 2000 && builds_at_touch < 0; ++k) { // 4 ms: a quarter turn and a bit
+        sys.step();
+        builds_at_touch = sys.counters().particle_contacts > 0 ? sys.neighbour_builds() : -1;
+    }
+    // The contact is found, before any centre moved by half a skin (no list rebuild).
+    EXPECT_EQ(builds_at_touch, builds);
+    for (int k = 0; k < 1000; ++k) {
+        sys.step();
+    }
+    const ParticleStore& p = sys.particles();
+    const std::size_t sphere = p.shape[0] < 0 ? 0 : 1;
+    constexpr double pushed = 0.05; // m/s; the hit transfers a fair part of the 1 m/s tip speed
+    EXPECT_GT(p.v[sphere].y(), pushed);
+    constexpr double conserved = 1e-12; // kg m/s; pair forces cancel to round-off
+    EXPECT_LT((momentum(sys) - p0).norm(), conserved);
+}
+
 TEST(Bodies, ElasticHeadOnCollisionOfSuperquadricsConservesMomentumAndEnergy) {
     SceneSpec s = base_scene();
     s.gravity.setZero();
