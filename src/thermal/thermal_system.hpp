@@ -179,6 +179,25 @@ class ThermalSystem {
     /// impact heat E of collision_conduction.hpp as the conductance E / (dt_thermal (T_j - T_i))
     /// for this thermal step, so one step moves E exactly; then clears the onsets.
     void add_collisions(const dynamics::System& sys, std::vector<double>& g_sum, double& worst);
+    /// Appends the static conduction of every touching pair and hot-wall contact of the System
+    /// (world-frame contacts turned into each body frame) to data_, with `g_sum` and `worst` as
+    /// add_gas_gaps.
+    void add_contacts(const dynamics::System& sys, std::vector<double>& g_sum, double& worst);
+    /// Radiating and stagnation-corrected slots of this thermal step (radiating_, stagnant_,
+    /// stag_h_ for the bodies' current orientation) and their lagged rates' share of `worst`.
+    void prepare_surface(const dynamics::System& sys, double& worst);
+    /// Lagged heat rates (W) of every exchange in data_ into face_rate_ / lumped_rate_ from the
+    /// temperatures at the start of a sub-step of `dt_sub` (s); hot walls book external heat.
+    void add_contact_rates(double dt_sub);
+    /// Backward-Euler sub-step of `dt_sub` (s) of every lumped particle (implicit convection,
+    /// linearised radiation to the ambient, lagged exchange rates).
+    void step_lumped(double dt_sub);
+    /// Adds the lagged stagnation correction and radiation to the ambient of the resolved
+    /// particles to face_rate_ (per face, W).
+    void add_surface_rates();
+    /// One backward-Euler solve per resolved particle with face_rate_ (threads over slots), for
+    /// a thermal step split into `substeps` of `dt_sub` (s); books external heat and counters.
+    void solve_resolved(const dynamics::System& sys, int substeps, double dt_sub);
 
     HeatSpec spec_;
     double dt_ = 0;
@@ -211,6 +230,9 @@ class ThermalSystem {
     std::vector<double> conv_rate_;
     std::vector<double> rad_rate_;    // lagged radiation to the ambient per face, this sub-step (W)
     std::vector<double> lumped_rate_; // contact heat rate per lumped slot (W)
+    std::vector<char> radiating_;     // per pool slot: radiates to the ambient this thermal step
+    std::vector<char> stagnant_;      // per pool slot: lagged stagnation correction this step
+    std::vector<double> weights_;     // patch shares of one contact side (scratch)
     double external_heat_ = 0;
     ThermalCounters counters_;
     std::vector<std::string> warnings_;
