@@ -1,6 +1,7 @@
 // Collision conduction in the run loop: contact onsets recorded by the sphere kernel, the impact
 // heat of collision_conduction.hpp (Sun & Chen 1988 with Zhou et al.'s c') exchanged once per
 // impact at the next thermal step, conservatively; nothing changes with the flag off.
+#include "common/closed_heat_run.hpp"
 #include "core/error.hpp"
 #include "dynamics/system.hpp"
 #include "geometry/shape.hpp"
@@ -154,19 +155,11 @@ TEST(CollisionRun, ClosedBoxOfCollidingSpheresConservesHeat) {
     const dynamics::SceneSpec s = box(true);
     dynamics::System sys(s);
     ThermalSystem heat(box_heat(s, true), sys);
-    const double e0 = heat.thermal_energy();
-    double drift = 0.0;
-    double lo = 1e300;
-    double hi = -1e300;
-    for (int k = 0; k < 20000; ++k) {
-        sys.step();
-        if (heat.after_step(sys)) {
-            drift = std::max(drift, std::abs(heat.thermal_energy() - e0) / e0);
-            const auto [a, b] = heat.temperature_range();
-            lo = std::min(lo, a);
-            hi = std::max(hi, b);
-        }
-    }
+    const test::ClosedHeatRun run = test::run_closed_heat(sys, heat, 20000);
+    const double e0 = run.initial_energy;
+    const double drift = run.drift;
+    const double lo = run.lowest;
+    const double hi = run.highest;
     std::printf("box: %ld impacts, drift %.3g, range [%.12g, %.12g] K, mean %.6g K\n",
                 heat.collisions(), drift, lo, hi, heat.thermal_energy() / heat.heat_capacity());
     EXPECT_GT(heat.collisions(), 300); // many impacts, or the test proves nothing
