@@ -179,6 +179,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 // Lever arms 0: v_rel is already the velocity of the contact point. The angular
                 // velocities only feed the rolling resistance (a couple, torque_i and torque_j).
                 const Vec3 wb = b >= 0 ? p_.omega[static_cast<std::uint32_t>(b)] : Vec3::Zero();
+                if (record_body_onsets_ && old == nullptr) { // heat: impact onset (system.cpp)
+                    note_body_onset(key, ec.normal, ec.point, v_rel, m_eff, r_eff);
+                }
                 contact::ContactInput in{ec.normal, ec.overlap, r_eff,       m_eff, 0.0,
                                          0.0,       v_rel,      p_.omega[a], wb};
                 Vec3 shear = old ? old->shear : Vec3::Zero();
@@ -267,6 +270,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 cb.overlap[q] = overlap;
                 cb.r_eff[q] = r_eff;
                 cb.m_eff[q] = p_.mass[a] * p_.mass[b] / (p_.mass[a] + p_.mass[b]);
+                if (record_body_onsets_ && old == nullptr) { // heat: impact onset (system.cpp)
+                    note_body_onset(key, n, point, v_rel, cb.m_eff[q], r_eff);
+                }
                 cb.set_pair(q, pairs_.at(p_.material[a], p_.material[b]));
                 q_a[q] = a;
                 q_b[q] = b;

@@ -140,7 +140,8 @@ void ThermalSystem::add_collisions(const dynamics::System& sys, std::vector<doub
         return k < by_id_.size() && index[k] >= 0 ? by_id_[k] : Record{};
     };
     long taken = 0;
-    for (const dynamics::ContactOnset& e : onsets_) {
+    for (const PendingImpact& impact : onsets_) {
+        const dynamics::ContactOnset& e = impact.onset;
         ContactData d;
         d.a = record_of(e.id_i);
         if (d.a.slot < 0 || !(e.speed > 0.0)) {
@@ -190,12 +191,12 @@ void ThermalSystem::add_collisions(const dynamics::System& sys, std::vector<doub
         // Exchanged over this thermal step as a lagged conductance: with one sub-step the heat
         // moved is E (T_j - T_i) with the temperatures at the start of the step.
         d.conductance = energy / dt_;
-        // Resolved spheres: the patches under the impact's contact disc, at the normal of the
-        // onset (spheres carry no orientation: world axes = body frame).
-        const Vec3 n(e.normal[0], e.normal[1], e.normal[2]);
-        const auto patches = [&](const Record& r, const Vec3& nb) {
+        // Resolved particles: the patches under the impact's contact disc around the contact
+        // point, in each body frame of the step that found it (after_step).
+        const auto patches = [&](const Record& r, const double* xp, const double* np) {
             const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
-            const Vec3 x = t.radius * nb;
+            const Vec3 x(xp[0], xp[1], xp[2]);
+            const Vec3 nb(np[0], np[1], np[2]);
             std::vector<int> out = heat::contact_patches(*t.grid, x, nb, rc);
             if (!t.spherical) {
                 widen_to_one_cell(*t.grid, t.capacity, t.full_cell_capacity, x, nb, out);
@@ -203,10 +204,10 @@ void ThermalSystem::add_collisions(const dynamics::System& sys, std::vector<doub
             return out;
         };
         if (d.a.templ >= 0) {
-            d.patches_a = patches(d.a, n);
+            d.patches_a = patches(d.a, impact.x_i, impact.n_i);
         }
         if (!d.wall && d.b.templ >= 0) {
-            d.patches_b = patches(d.b, -n);
+            d.patches_b = patches(d.b, impact.x_j, impact.n_j);
         }
         const auto ia = static_cast<std::size_t>(index[static_cast<std::size_t>(e.id_i)]);
         g_sum[ia] += d.conductance;

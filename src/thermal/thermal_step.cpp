@@ -18,9 +18,48 @@ namespace kiln::thermal {
 using namespace detail;
 
 bool ThermalSystem::after_step(const dynamics::System& sys) {
-    if (spec_.collision_conduction) {
-        const std::vector<dynamics::ContactOnset>& e = sys.contact_onsets();
-        onsets_.insert(onsets_.end(), e.begin(), e.end());
+    if (spec_.collision_conduction && !sys.contact_onsets().empty()) {
+        // Each side's contact in its body frame now, at the step that found the impact: a body
+        // turns before the thermal step exchanges the heat. Spheres carry no orientation (world
+        // axes): their contact point is R n.
+        const ParticleStore& p = sys.particles();
+        index_.assign(by_id_.size(), -1);
+        for (std::size_t i = 0; i < p.size(); ++i) {
+            const auto id = static_cast<std::size_t>(p.id[i]);
+            if (id < index_.size()) {
+                index_[id] = static_cast<std::int64_t>(i);
+            }
+        }
+        const auto side = [&](std::int64_t id, const Vec3& n, const Vec3& point, double* x,
+                              double* nb) {
+            if (id < 0 || static_cast<std::size_t>(id) >= index_.size() ||
+                index_[static_cast<std::size_t>(id)] < 0) {
+                return; // no heat record yet: add_collisions skips it
+            }
+            const auto i = static_cast<std::size_t>(index_[static_cast<std::size_t>(id)]);
+            Vec3 xb = p.radius[i] * n;
+            Vec3 nn = n;
+            if (p.shape[i] >= 0) {
+                const Quat inv = p.q[i].conjugate();
+                xb = inv * (point - p.x[i]);
+                nn = inv * n;
+            }
+            for (int q = 0; q < 3; ++q) {
+                x[q] = xb[q];
+                nb[q] = nn[q];
+            }
+        };
+        for (const dynamics::ContactOnset& e : sys.contact_onsets()) {
+            PendingImpact m;
+            m.onset = e;
+            const Vec3 n(e.normal[0], e.normal[1], e.normal[2]);
+            const Vec3 point(e.point[0], e.point[1], e.point[2]);
+            side(e.id_i, n, point, m.x_i, m.n_i);
+            if (e.wall < 0) {
+                side(e.id_j, -n, point, m.x_j, m.n_j);
+            }
+            onsets_.push_back(m);
+        }
     }
     if (sys.step_count() % spec_.step_multiple != 0) {
         return false;

@@ -165,20 +165,11 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
         }
     }
     if (spec_.collision_conduction) {
-        // Impacts come from the sphere kernel's onset records: bodies (element contacts in
-        // system_bodies.cpp) and mesh walls record none yet.
+        // Impacts come from the System's onset records (sphere kernel and body element
+        // contacts); mesh walls record none yet.
         if (!sys.spec().record_contact_onsets) {
             throw InputError("heat: collision_conduction needs the System to record contact "
                              "onsets (SceneSpec::record_contact_onsets = true)");
-        }
-        for (const auto& [material, shape, where] : kinds) {
-            if (shape >= 0) {
-                throw InputError(fmt::format(
-                    "heat: collision_conduction with non-spherical particles ({}): not yet for "
-                    "bodies (impacts are recorded for spheres only; set collision_conduction = "
-                    "false or use spheres)",
-                    describe_kind(sys, material, shape, where)));
-            }
         }
         for (std::size_t w = 0; w < spec_.mesh_wall_temperature.size(); ++w) {
             if (!std::isnan(spec_.mesh_wall_temperature[w])) {

@@ -51,6 +51,16 @@ struct MaterialChoice {
     std::string grid; ///< "spherical", "cartesian", both joined by '+' (spheres and bodies), or ""
 };
 
+/// A contact onset waiting for the next thermal step, with its contact in each side's body frame
+/// at the step that found it (bodies turn before the thermal step; spheres: world axes).
+struct PendingImpact {
+    dynamics::ContactOnset onset; ///< as recorded by the System
+    double x_i[3] = {0, 0, 0};    ///< contact point relative to i's centre (m, i's body frame)
+    double n_i[3] = {0, 0, 1};    ///< unit normal from i towards its partner (i's body frame)
+    double x_j[3] = {0, 0, 0};    ///< contact point relative to j's centre (m, j's body frame)
+    double n_j[3] = {0, 0, -1};   ///< unit normal from j towards i (j's body frame); walls: unused
+};
+
 /// Everything a checkpoint needs to continue the temperatures bit for bit.
 struct ThermalState {
     std::vector<double> fields;    ///< resolved fields, slot after slot (K)
@@ -59,7 +69,7 @@ struct ThermalState {
     double external_heat = 0;      ///< heat that entered from outside so far (J)
     ThermalCounters counters;      ///< counters so far
     /// Contact onsets taken from the System since the last thermal step (collision conduction).
-    std::vector<dynamics::ContactOnset> onsets;
+    std::vector<PendingImpact> onsets;
 };
 
 /// Per-particle temperatures for output, by particle index of the store (K).
@@ -90,9 +100,9 @@ class ThermalSystem {
     ThermalSystem(const ThermalSystem&) = delete;
     ThermalSystem& operator=(const ThermalSystem&) = delete;
 
-    /// Call after every mechanical step: takes the step's contact onsets (collision conduction)
-    /// and a thermal step when the step count is a multiple of step_multiple. Returns true when
-    /// it took a thermal step.
+    /// Call after every mechanical step: takes the step's contact onsets (collision conduction;
+    /// each turned into the body frames of that step) and a thermal step when the step count is
+    /// a multiple of step_multiple. Returns true when it took a thermal step.
     bool after_step(const dynamics::System& sys);
 
     /// One thermal step of step_multiple * dt from the current contacts (lagged exchange) and the
@@ -237,10 +247,11 @@ class ThermalSystem {
     ThermalCounters counters_;
     std::vector<std::string> warnings_;
     // Pairs summed over this process's thermal steps (summary.json; not checkpointed).
-    long gas_pairs_ = 0;       // gas-gap pairs
-    long radiation_pairs_ = 0; // radiating pairs
-    long collisions_ = 0;      // impacts that exchanged heat (collision conduction)
-    std::vector<dynamics::ContactOnset> onsets_; // taken from the System, not yet exchanged
+    long gas_pairs_ = 0;                // gas-gap pairs
+    long radiation_pairs_ = 0;          // radiating pairs
+    long collisions_ = 0;               // impacts that exchanged heat (collision conduction)
+    std::vector<PendingImpact> onsets_; // taken from the System, not yet exchanged
+    std::vector<std::int64_t> index_;   // particle index by id (after_step's scratch)
     bool warned_lag_ = false;
     bool warned_solver_ = false;
 };

@@ -4,10 +4,12 @@
 #include "common/closed_heat_run.hpp"
 #include "core/error.hpp"
 #include "dynamics/system.hpp"
+#include "geometry/mesh_wall.hpp"
 #include "geometry/shape.hpp"
 #include "heat/collision_conduction.hpp"
 #include "thermal/thermal_system.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <gtest/gtest.h>
@@ -217,7 +219,7 @@ TEST(CollisionRun, FlagOffChangesNothingAndRecordingLeavesTheMechanicsAlone) {
     EXPECT_LT(hot2, hot0);
 }
 
-TEST(CollisionRun, BodiesMeshWallsAndAMissingRecorderAreRefused) {
+TEST(CollisionRun, HotMeshWallsAndAMissingRecorderAreRefused) {
     dynamics::SceneSpec s = empty_scene();
     s.particles.push_back({0, radius, Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
     s.record_contact_onsets = false;
@@ -229,19 +231,22 @@ TEST(CollisionRun, BodiesMeshWallsAndAMissingRecorderAreRefused) {
         EXPECT_NE(std::string(e.what()).find("record_contact_onsets"), std::string::npos);
     }
     s.record_contact_onsets = true;
-    geometry::Superquadric q;
-    q.half_axes = Vec3(2e-3, 2e-3, 3e-3);
-    s.shapes.push_back(geometry::make_template("ellipsoid", q));
-    dynamics::ParticleSpec body;
-    body.shape = 0;
-    body.x = Vec3(0.02, 0, 0);
-    s.particles.push_back(body);
-    dynamics::System with_body(s);
+    // A hot mesh wall: its contacts record no onsets yet.
+    const double l = 0.05;
+    s.mesh_walls.push_back(
+        {"floor",
+         std::make_shared<const geometry::MeshWall>(
+             std::vector<Vec3>{Vec3(-l, -l, -l), Vec3(l, -l, -l), Vec3(l, l, -l), Vec3(-l, l, -l)},
+             std::vector<std::array<int, 3>>{{0, 1, 2}, {0, 2, 3}}, "test floor"),
+         0});
+    dynamics::System with_mesh(s);
+    HeatSpec h = heat_of(s, heat::HeatModel::lumped);
+    h.mesh_wall_temperature = {400.0};
     try {
-        ThermalSystem heat(heat_of(s, heat::HeatModel::lumped), with_body);
-        FAIL() << "accepted collision conduction with a body";
+        ThermalSystem heat(h, with_mesh);
+        FAIL() << "accepted collision conduction with a hot mesh wall";
     } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("not yet for bodies"), std::string::npos);
+        EXPECT_NE(std::string(e.what()).find("not yet for mesh walls"), std::string::npos);
     }
 }
 
