@@ -76,6 +76,9 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
     const auto emissivity = [&](const Record& rec) {
         return spec_.materials[static_cast<std::size_t>(rec.material)].emissivity;
     };
+    // Ambient view shares: the whole surface unless neighbours take part of it (below).
+    lumped_view_.assign(lumped_.size(), 1.0);
+    pool_view_.assign(static_cast<std::size_t>(pool_.size()), 1.0);
     // Heated spheres with an emissivity (others radius 0: left out of the search).
     std::vector<double> r(p.size(), 0.0);
     bool any = false;
@@ -89,6 +92,10 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
     if (!any) {
         return;
     }
+    const auto ambient_view = [&](const Record& rec) -> double& {
+        return rec.templ < 0 ? lumped_view_[static_cast<std::size_t>(rec.slot)]
+                             : pool_view_[static_cast<std::size_t>(rec.slot)];
+    };
     long pairs = 0;
     for (const heat::NearPair& np : heat::near_sphere_pairs(p.x, r, spec_.radiation_cutoff)) {
         ContactData d;
@@ -98,8 +105,13 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
         const Vec3 between = p.x[np.j] - p.x[np.i];
         const double s = between.norm();
         // Overlapping (touching) spheres radiate as if just touching.
-        d.conductance = heat::radiative_coefficient(
-            r[np.i], r[np.j], std::max(s, r[np.i] + r[np.j]), emissivity(d.a), emissivity(d.b));
+        const double apart = std::max(s, r[np.i] + r[np.j]);
+        d.conductance =
+            heat::radiative_coefficient(r[np.i], r[np.j], apart, emissivity(d.a), emissivity(d.b));
+        // What each sees of the partner, it does not see of the ambient (sum of view factors 1).
+        const double af = heat::pair_view_area(r[np.i], r[np.j], apart);
+        ambient_view(d.a) -= af / sphere_area(r[np.i]);
+        ambient_view(d.b) -= af / sphere_area(r[np.j]);
         // Resolved spheres exchange over the hemisphere facing the partner (world axes = body
         // frame for spheres): its area-weighted cell temperature, and the heat spread over it.
         const Vec3 n = between / s;
@@ -122,6 +134,12 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
         ++pairs;
     }
     radiation_pairs_ += pairs;
+    for (double& v : lumped_view_) {
+        v = std::max(0.0, v); // a crowded bed (the centre estimate of F is low, so rare)
+    }
+    for (double& v : pool_view_) {
+        v = std::max(0.0, v);
+    }
 }
 
 void ThermalSystem::add_collisions(const dynamics::System& sys, std::vector<double>& g_sum,

@@ -25,7 +25,9 @@ void ThermalSystem::prepare_surface(const dynamics::System& sys, double& worst) 
         for (int slot = 0; slot < pool_.size(); ++slot) {
             const Template& t = *templates_[static_cast<std::size_t>(
                 pool_template_[static_cast<std::size_t>(slot)])];
-            const double eps = spec_.materials[static_cast<std::size_t>(t.material)].emissivity;
+            // Emissivity times the share of the view that reaches the ambient.
+            const double eps = spec_.materials[static_cast<std::size_t>(t.material)].emissivity *
+                               pool_view_[static_cast<std::size_t>(slot)];
             if (!(eps > 0.0)) {
                 continue;
             }
@@ -75,8 +77,9 @@ void ThermalSystem::step_lumped(double dt_sub) {
         const double c = lumped_capacity_[k];
         const double a = lumped_area_[k];
         const double t_old = lumped_[k];
-        const double gr =
-            std::isnan(t_rad) ? 0.0 : lumped_emissivity_[k] * heat::stefan_boltzmann * a;
+        const double gr = std::isnan(t_rad) ? 0.0
+                                            : lumped_emissivity_[k] * lumped_view_[k] *
+                                                  heat::stefan_boltzmann * a;
         const double t3 = t_old * t_old * t_old;
         const double t_new =
             (c * t_old + dt_sub * (h * a * spec_.ambient_temperature + spec_.flux * a +
@@ -121,7 +124,8 @@ void ThermalSystem::add_surface_rates() {
         }
         const Template& t =
             *templates_[static_cast<std::size_t>(pool_template_[static_cast<std::size_t>(slot)])];
-        const double eps = spec_.materials[static_cast<std::size_t>(t.material)].emissivity;
+        const double eps = spec_.materials[static_cast<std::size_t>(t.material)].emissivity *
+                           pool_view_[static_cast<std::size_t>(slot)];
         const std::size_t off = face_offset_[static_cast<std::size_t>(slot)];
         const std::span<const double> f = pool_.field(slot);
         for (std::size_t b = 0; b < t.grid->boundary.size(); ++b) {

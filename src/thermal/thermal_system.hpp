@@ -228,7 +228,11 @@ class ThermalSystem {
     std::vector<double> lumped_capacity_;   // rho c V (J/K)
     std::vector<double> lumped_area_;       // surface area (m^2)
     std::vector<double> lumped_emissivity_; // emissivity of each lumped slot (-)
-    std::vector<std::int64_t> slot_ids_;    // id of each record created, in creation order
+    // Share of each particle's view that goes to the ambient (radiation_temperature): 1 minus the
+    // view factors (A F)_ij / A_i of its radiating neighbours this thermal step, >= 0 (-).
+    std::vector<double> lumped_view_;    // per lumped slot
+    std::vector<double> pool_view_;      // per pool slot
+    std::vector<std::int64_t> slot_ids_; // id of each record created, in creation order
     std::vector<dynamics::ContactRecord> contacts_;
     std::vector<ContactData> data_;
     std::vector<double> face_rate_;        // heat rate per boundary face of every pool slot (W)

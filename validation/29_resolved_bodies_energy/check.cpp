@@ -22,7 +22,7 @@ namespace {
 /// resolved solve; over ~1e5 solves the drift stays well below 1e-9 (as validations 26, 28).
 constexpr double energy_tolerance = 1e-9;
 /// Maximum principle (K). Cartesian patches split a contact's heat by each cell's distance to the
-/// partner's temperature (split_weights in thermal_system.cpp), so no cell crosses it within a
+/// partner's temperature (split_weights in thermal_contacts.cpp), so no cell crosses it within a
 /// sub-step and a donor cell at 300 K gives nothing. With the earlier uniform split (per capacity)
 /// the lowest cell dipped 3.3e-4 K below 300 K and the bound had been raised to 1e-3 K; measured
 /// now: 8.9e-12 K (solver tolerance), so the bound is back at 1e-4 K (README, finding 2). A real
