@@ -22,6 +22,7 @@ bool ThermalSystem::after_step(const dynamics::System& sys) {
         // Each side's contact in its body frame now, at the step that found the impact: a body
         // turns before the thermal step exchanges the heat. Spheres carry no orientation (world
         // axes): their contact point is R n.
+        sync(sys); // a particle inserted in this step may already have touched
         const ParticleStore& p = sys.particles();
         index_.assign(by_id_.size(), -1);
         for (std::size_t i = 0; i < p.size(); ++i) {
@@ -34,7 +35,7 @@ bool ThermalSystem::after_step(const dynamics::System& sys) {
                               double* nb) {
             if (id < 0 || static_cast<std::size_t>(id) >= index_.size() ||
                 index_[static_cast<std::size_t>(id)] < 0) {
-                return; // no heat record yet: add_collisions skips it
+                return; // the particle left the scene: add_collisions skips it
             }
             const auto i = static_cast<std::size_t>(index_[static_cast<std::size_t>(id)]);
             Vec3 xb = p.radius[i] * n;
