@@ -108,8 +108,9 @@ struct SceneSpec {
     std::vector<geometry::ShapeTemplate> shapes;      ///< templates of the non-spherical particles
     NarrowPhase narrow_phase = NarrowPhase::newton;   ///< method for superquadric pairs
     BodyRadius body_radius = BodyRadius::first_touch; ///< R* of superquadric contacts
-    /// Record the start of every sphere-sphere and sphere-wall contact (System::contact_onsets;
-    /// for collision conduction). Off: the force loop runs the same code as without heat.
+    /// Record the start of every contact with another particle or an analytic wall, spheres and
+    /// bodies (System::contact_onsets; for collision conduction). Off: the force loop runs the
+    /// same code as without heat.
     bool record_contact_onsets = false;
 };
 

@@ -627,6 +627,30 @@ void System::half_kick(std::size_t p0, std::size_t p1) {
     }
 }
 
+void System::note_body_onset(const BodyContactKey& key, const Vec3& n, const Vec3& point,
+                             const Vec3& v_rel, double m_eff, double r_eff) {
+    const auto n_walls = static_cast<std::int64_t>(spec_.walls.size());
+    ContactOnset e;
+    e.id_i = key.a;
+    if (key.b >= 0) {
+        e.id_j = key.b;
+    } else if (-1 - key.b < n_walls) {
+        e.wall = static_cast<std::int32_t>(-1 - key.b);
+    } else {
+        return; // mesh walls: not recorded (the heat coupling refuses hot mesh walls with them)
+    }
+    e.step = step_ + 1; // the step counter advances after the forces
+    // v_rel is v^(n+1/2) of the contact point, before the contact force acted (as for spheres).
+    e.speed = std::max(0.0, -v_rel.dot(n));
+    e.r_eff = r_eff;
+    e.m_eff = m_eff;
+    for (int q = 0; q < 3; ++q) {
+        e.normal[q] = -n[q]; // n runs from b to a
+        e.point[q] = point[q];
+    }
+    onsets_.push_back(e);
+}
+
 void System::compute_forces(bool kick_requested) {
     // With bodies, their contacts are added after the sphere loop (body_forces), so the kick waits.
     const bool kick = kick_requested && !generic_contacts();
@@ -638,8 +662,9 @@ void System::compute_forces(bool kick_requested) {
     const std::size_t particle_units = (n + particle_unit_size - 1) / particle_unit_size;
     pair_totals_.assign(pair_units, ChunkTotals{});
     particle_totals_.assign(particle_units, ChunkTotals{});
-    // Contact onsets only at a step (a refresh has no start-of-step positions) and for spheres.
-    const bool record = spec_.record_contact_onsets && kick_requested && !has_bodies_;
+    // Contact onsets only at a step (a refresh has no start-of-step positions); bodies' element
+    // contacts are recorded in body_forces().
+    const bool record = spec_.record_contact_onsets && kick_requested;
     onsets_.clear();
     if (record) {
         pair_onsets_.resize(pair_units);
@@ -680,7 +705,13 @@ void System::compute_forces(bool kick_requested) {
                         continue;
                     }
                     const std::size_t end = std::min(entries, begin + pair_chunk_size);
-                    if (has_bodies_) {
+                    if (has_bodies_ && record) {
+                        if (direct) {
+                            pair_chunk<Law, true, true, true>(law, begin, end, pair_totals_[u]);
+                        } else {
+                            pair_chunk<Law, false, true, true>(law, begin, end, pair_totals_[u]);
+                        }
+                    } else if (has_bodies_) {
                         if (direct) {
                             pair_chunk<Law, true, true>(law, begin, end, pair_totals_[u]);
                         } else {
@@ -736,7 +767,9 @@ void System::compute_forces(bool kick_requested) {
     ChunkTotals body_pairs;
     ChunkTotals body_walls;
     if (generic_contacts()) {
+        record_body_onsets_ = record;
         body_forces(body_pairs, body_walls);
+        record_body_onsets_ = false;
         if (kick_requested) {
 #pragma omp parallel for num_threads(threads_) schedule(static)
             for (std::size_t u = 0; u < particle_units; ++u) {

@@ -53,8 +53,9 @@ struct ContactRecord {
 };
 
 /// The start of a contact found by the force loop of one step (recorded only when
-/// SceneSpec::record_contact_onsets is set and the scene has no bodies): the pair touches at the
-/// end of the step and did not at its start. For the heat coupling (collision conduction).
+/// SceneSpec::record_contact_onsets is set): for spheres the pair touches at the end of the step
+/// and did not at its start; for element contacts of bodies (body_forces) the element pair has no
+/// record of the last step. For the heat coupling (collision conduction).
 struct ContactOnset {
     std::int64_t id_i = 0;  ///< particle id of i
     std::int64_t id_j = -1; ///< particle id of the partner; -1 for a wall
@@ -64,6 +65,9 @@ struct ContactOnset {
     double r_eff = 0;       ///< effective radius of curvature R* (m)
     double m_eff = 0;       ///< effective mass m* (kg); the particle's mass against a wall
     double normal[3] = {0, 0, 1}; ///< unit normal from i towards its partner (world)
+    /// Contact point (m, world) of an element contact of a body; 0 for sphere-kernel onsets
+    /// (a sphere's contact point is its centre + R normal).
+    double point[3] = {0, 0, 0};
 };
 
 /// Everything that evolves during a run: enough to continue it exactly.
@@ -131,9 +135,10 @@ class System {
     void collect_contacts(std::vector<ContactRecord>& out) const;
 
     /// Contacts that started during the last step() (sphere-sphere in neighbour-list chunk order,
-    /// then sphere-wall in particle-unit and wall order); empty unless
-    /// SceneSpec::record_contact_onsets is set and the scene has no bodies. Overwritten by the
-    /// next step: a consumer takes them after every step.
+    /// then sphere-wall in particle-unit and wall order, then element contacts of bodies with
+    /// each other and analytic walls in body_forces() order; mesh walls record none); empty
+    /// unless SceneSpec::record_contact_onsets is set. Overwritten by the next step: a consumer
+    /// takes them after every step.
     [[nodiscard]] const std::vector<ContactOnset>& contact_onsets() const { return onsets_; }
 
     /// Copies out the full evolving state (checkpoint).
@@ -261,6 +266,13 @@ class System {
     // while the force loop runs, then joined in that fixed order into onsets_.
     std::vector<std::vector<ContactOnset>> pair_onsets_, wall_onsets_;
     std::vector<ContactOnset> onsets_;
+    // body_forces() of this step appends element-contact onsets (heat: collision conduction).
+    bool record_body_onsets_ = false;
+    /// Appends the onset of the new element contact `key` (pair or analytic wall; mesh walls are
+    /// skipped) with normal `n` (b to a, world), contact point `point` (m, world), relative
+    /// velocity of the contact point `v_rel` (a minus b, m/s), m* (kg) and R* (m) to onsets_.
+    void note_body_onset(const BodyContactKey& key, const Vec3& n, const Vec3& point,
+                         const Vec3& v_rel, double m_eff, double r_eff);
     /// True when contacts go through body_forces (bodies or mesh walls present).
     [[nodiscard]] bool generic_contacts() const { return has_bodies_ || !spec_.mesh_walls.empty(); }
 };

@@ -231,6 +231,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 // Lever arms 0: v_rel is already the velocity of the contact point. The angular
                 // velocities only feed the rolling resistance (a couple, torque_i and torque_j).
                 const Vec3 wb = b >= 0 ? p_.omega[static_cast<std::uint32_t>(b)] : Vec3::Zero();
+                if (record_body_onsets_ && old == nullptr) { // heat: impact onset (system.cpp)
+                    note_body_onset(key, ec.normal, ec.point, v_rel, m_eff, r_eff);
+                }
                 contact::ContactInput in{ec.normal, ec.overlap, r_eff,       m_eff, 0.0,
                                          0.0,       v_rel,      p_.omega[a], wb};
                 Vec3 shear = old ? old->shear : Vec3::Zero();
@@ -261,6 +264,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             constexpr std::size_t block = 16;
             contact::ContactBlock<block> cb;
             std::uint32_t q_a[block], q_b[block], q_slot[block];
+            bool q_new[block]; // the queued contact is new this step (heat: impact onsets)
             // Raw data of queued sphere pairs (world frame): element centres and radii, body
             // centres, velocities, masses, R* of the first touch (0: none), ratio scale.
             double g_ca[3][block], g_cb[3][block], g_xa[3][block], g_xb[3][block];
@@ -322,6 +326,11 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         rec.point = Vec3(g_p[0][q], g_p[1][q], g_p[2][q]);
                         rec.overlap = cb.overlap[q];
                         rec.r_eff = cb.r_eff[q];
+                        if (record_body_onsets_ && q_new[q]) { // heat: impact onset (system.cpp)
+                            note_body_onset(next_contacts_[q_slot[q]].key, rec.normal, rec.point,
+                                            Vec3(cb.v[0][q], cb.v[1][q], cb.v[2][q]), cb.m_eff[q],
+                                            rec.r_eff);
+                        }
                     }
                 }
 #pragma omp simd
@@ -371,6 +380,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 cb.overlap[q] = ec.overlap;
                 cb.r_eff[q] = r_eff;
                 cb.m_eff[q] = p_.mass[a];
+                if (record_body_onsets_ && old == nullptr) { // heat: impact onset (system.cpp)
+                    note_body_onset(key, ec.normal, ec.point, v_rel, p_.mass[a], r_eff);
+                }
                 cb.set_pair(q, pairs_.at(p_.material[a], material_w));
                 q_a[q] = a;
                 q_b[q] = no_element;
@@ -407,6 +419,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 // R*: with first_touch, that of the contact's first step (the same for spheres)
                 g_r0[q] = first_touch && old != nullptr ? old->r_eff : 0.0;
                 g_size[q] = ratio_size(A, &B);
+                q_new[q] = old == nullptr;
                 cb.set_pair(q, pairs_.at(p_.material[a], p_.material[b]));
                 q_a[q] = a;
                 q_b[q] = b;

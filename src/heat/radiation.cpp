@@ -17,6 +17,13 @@ double sphere_view_factor(double r_j, double distance) {
     return 0.5 * x * x / (1.0 + std::sqrt(1.0 - x * x));
 }
 
+double pair_view_area(double r_i, double r_j, double distance) {
+    const double a_i = 4.0 * std::numbers::pi * r_i * r_i;
+    const double a_j = 4.0 * std::numbers::pi * r_j * r_j;
+    return 0.5 *
+           (a_i * sphere_view_factor(r_j, distance) + a_j * sphere_view_factor(r_i, distance));
+}
+
 double radiative_coefficient(double r_i, double r_j, double distance, double e_i, double e_j) {
     if (!(e_i >= 0.0 && e_i <= 1.0) || !(e_j >= 0.0 && e_j <= 1.0)) {
         throw InputError("heat: radiation needs emissivities 0 <= e <= 1");
@@ -32,8 +39,7 @@ double radiative_coefficient(double r_i, double r_j, double distance, double e_i
     }
     const double a_i = 4.0 * std::numbers::pi * r_i * r_i;
     const double a_j = 4.0 * std::numbers::pi * r_j * r_j;
-    const double af =
-        0.5 * (a_i * sphere_view_factor(r_j, distance) + a_j * sphere_view_factor(r_i, distance));
+    const double af = pair_view_area(r_i, r_j, distance);
     const double resistance = (1.0 - e_i) / (e_i * a_i) + 1.0 / af + (1.0 - e_j) / (e_j * a_j);
     return stefan_boltzmann / resistance;
 }

@@ -28,6 +28,10 @@ inline constexpr double stefan_boltzmann = 5.670374419e-8;
 /// away: (1 - sqrt(1 - (r_j / s)^2)) / 2. Throws InputError for r_j <= 0 or s <= r_j.
 [[nodiscard]] double sphere_view_factor(double r_j, double distance);
 
+/// View area (A F)_ij (m^2) of the pair as kiln uses it, (A_i F_ij + A_j F_ji) / 2 (reciprocal),
+/// for spheres of radii `r_i`, `r_j` (m) with centres `distance` (m) >= r_i + r_j apart.
+[[nodiscard]] double pair_view_area(double r_i, double r_j, double distance);
+
 /// Radiative exchange coefficient K (W/K^4) of spheres of radii `r_i`, `r_j` (m), centres
 /// `distance` (m) apart, emissivities `e_i`, `e_j` (0 < e <= 1): the heat rate into i is
 /// K (T_j^4 - T_i^4); symmetric in the pair. Zero when either emissivity is 0. Throws InputError

@@ -147,8 +147,10 @@ struct BodyContactArrays {
 /// Tag of the optional heat section after the mechanical state.
 constexpr char heat_magic[8] = {'K', 'I', 'L', 'N', 'H', 'E', 'A', 'T'};
 
-/// Tag of the optional list of pending contact onsets after the heat section.
-constexpr char onset_magic[8] = {'K', 'I', 'L', 'N', 'O', 'N', 'S', 'T'};
+/// Tag of the optional list of pending impacts (thermal::PendingImpact) after the heat section.
+constexpr char onset_magic[8] = {'K', 'I', 'L', 'N', 'I', 'M', 'P', '1'};
+/// Tag of the same list before impacts carried body-frame contacts (not readable any more).
+constexpr char old_onset_magic[8] = {'K', 'I', 'L', 'N', 'O', 'N', 'S', 'T'};
 
 template <class IO, class Heat> void heat_fields(IO& io, Heat& h) {
     io.vec(h.fields);
@@ -189,6 +191,10 @@ std::optional<thermal::ThermalState> read_checkpoint_heat(const std::filesystem:
     f.read(o, sizeof o);
     if (f && std::memcmp(o, onset_magic, sizeof onset_magic) == 0) {
         in.vec(t.onsets);
+    } else if (f && std::memcmp(o, old_onset_magic, sizeof old_onset_magic) == 0) {
+        throw InputError(file.string(), 0, "",
+                         "pending contact onsets in an older checkpoint format (before impacts "
+                         "of bodies): restart the run from its case file");
     }
     return t;
 }
@@ -220,7 +226,7 @@ void write_checkpoint(const std::filesystem::path& file, const dynamics::SystemS
             thermal::ThermalState copy = *heat;
             heat_fields(out, copy);
             if (!copy.onsets.empty()) {
-                static_assert(std::is_trivially_copyable_v<dynamics::ContactOnset>);
+                static_assert(std::is_trivially_copyable_v<thermal::PendingImpact>);
                 f.write(onset_magic, sizeof onset_magic);
                 out.vec(copy.onsets);
             }

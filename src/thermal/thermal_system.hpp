@@ -51,6 +51,16 @@ struct MaterialChoice {
     std::string grid; ///< "spherical", "cartesian", both joined by '+' (spheres and bodies), or ""
 };
 
+/// A contact onset waiting for the next thermal step, with its contact in each side's body frame
+/// at the step that found it (bodies turn before the thermal step; spheres: world axes).
+struct PendingImpact {
+    dynamics::ContactOnset onset; ///< as recorded by the System
+    double x_i[3] = {0, 0, 0};    ///< contact point relative to i's centre (m, i's body frame)
+    double n_i[3] = {0, 0, 1};    ///< unit normal from i towards its partner (i's body frame)
+    double x_j[3] = {0, 0, 0};    ///< contact point relative to j's centre (m, j's body frame)
+    double n_j[3] = {0, 0, -1};   ///< unit normal from j towards i (j's body frame); walls: unused
+};
+
 /// Everything a checkpoint needs to continue the temperatures bit for bit.
 struct ThermalState {
     std::vector<double> fields;    ///< resolved fields, slot after slot (K)
@@ -59,7 +69,7 @@ struct ThermalState {
     double external_heat = 0;      ///< heat that entered from outside so far (J)
     ThermalCounters counters;      ///< counters so far
     /// Contact onsets taken from the System since the last thermal step (collision conduction).
-    std::vector<dynamics::ContactOnset> onsets;
+    std::vector<PendingImpact> onsets;
 };
 
 /// Per-particle temperatures for output, by particle index of the store (K).
@@ -90,9 +100,9 @@ class ThermalSystem {
     ThermalSystem(const ThermalSystem&) = delete;
     ThermalSystem& operator=(const ThermalSystem&) = delete;
 
-    /// Call after every mechanical step: takes the step's contact onsets (collision conduction)
-    /// and a thermal step when the step count is a multiple of step_multiple. Returns true when
-    /// it took a thermal step.
+    /// Call after every mechanical step: takes the step's contact onsets (collision conduction;
+    /// each turned into the body frames of that step) and a thermal step when the step count is
+    /// a multiple of step_multiple. Returns true when it took a thermal step.
     bool after_step(const dynamics::System& sys);
 
     /// One thermal step of step_multiple * dt from the current contacts (lagged exchange) and the
@@ -179,6 +189,25 @@ class ThermalSystem {
     /// impact heat E of collision_conduction.hpp as the conductance E / (dt_thermal (T_j - T_i))
     /// for this thermal step, so one step moves E exactly; then clears the onsets.
     void add_collisions(const dynamics::System& sys, std::vector<double>& g_sum, double& worst);
+    /// Appends the static conduction of every touching pair and hot-wall contact of the System
+    /// (world-frame contacts turned into each body frame) to data_, with `g_sum` and `worst` as
+    /// add_gas_gaps.
+    void add_contacts(const dynamics::System& sys, std::vector<double>& g_sum, double& worst);
+    /// Radiating and stagnation-corrected slots of this thermal step (radiating_, stagnant_,
+    /// stag_h_ for the bodies' current orientation) and their lagged rates' share of `worst`.
+    void prepare_surface(const dynamics::System& sys, double& worst);
+    /// Lagged heat rates (W) of every exchange in data_ into face_rate_ / lumped_rate_ from the
+    /// temperatures at the start of a sub-step of `dt_sub` (s); hot walls book external heat.
+    void add_contact_rates(double dt_sub);
+    /// Backward-Euler sub-step of `dt_sub` (s) of every lumped particle (implicit convection,
+    /// linearised radiation to the ambient, lagged exchange rates).
+    void step_lumped(double dt_sub);
+    /// Adds the lagged stagnation correction and radiation to the ambient of the resolved
+    /// particles to face_rate_ (per face, W).
+    void add_surface_rates();
+    /// One backward-Euler solve per resolved particle with face_rate_ (threads over slots), for
+    /// a thermal step split into `substeps` of `dt_sub` (s); books external heat and counters.
+    void solve_resolved(const dynamics::System& sys, int substeps, double dt_sub);
 
     HeatSpec spec_;
     double dt_ = 0;
@@ -199,7 +228,11 @@ class ThermalSystem {
     std::vector<double> lumped_capacity_;   // rho c V (J/K)
     std::vector<double> lumped_area_;       // surface area (m^2)
     std::vector<double> lumped_emissivity_; // emissivity of each lumped slot (-)
-    std::vector<std::int64_t> slot_ids_;    // id of each record created, in creation order
+    // Share of each particle's view that goes to the ambient (radiation_temperature): 1 minus the
+    // view factors (A F)_ij / A_i of its radiating neighbours this thermal step, >= 0 (-).
+    std::vector<double> lumped_view_;    // per lumped slot
+    std::vector<double> pool_view_;      // per pool slot
+    std::vector<std::int64_t> slot_ids_; // id of each record created, in creation order
     std::vector<dynamics::ContactRecord> contacts_;
     std::vector<ContactData> data_;
     std::vector<double> face_rate_;        // heat rate per boundary face of every pool slot (W)
@@ -211,14 +244,18 @@ class ThermalSystem {
     std::vector<double> conv_rate_;
     std::vector<double> rad_rate_;    // lagged radiation to the ambient per face, this sub-step (W)
     std::vector<double> lumped_rate_; // contact heat rate per lumped slot (W)
+    std::vector<char> radiating_;     // per pool slot: radiates to the ambient this thermal step
+    std::vector<char> stagnant_;      // per pool slot: lagged stagnation correction this step
+    std::vector<double> weights_;     // patch shares of one contact side (scratch)
     double external_heat_ = 0;
     ThermalCounters counters_;
     std::vector<std::string> warnings_;
     // Pairs summed over this process's thermal steps (summary.json; not checkpointed).
-    long gas_pairs_ = 0;       // gas-gap pairs
-    long radiation_pairs_ = 0; // radiating pairs
-    long collisions_ = 0;      // impacts that exchanged heat (collision conduction)
-    std::vector<dynamics::ContactOnset> onsets_; // taken from the System, not yet exchanged
+    long gas_pairs_ = 0;                // gas-gap pairs
+    long radiation_pairs_ = 0;          // radiating pairs
+    long collisions_ = 0;               // impacts that exchanged heat (collision conduction)
+    std::vector<PendingImpact> onsets_; // taken from the System, not yet exchanged
+    std::vector<std::int64_t> index_;   // particle index by id (after_step's scratch)
     bool warned_lag_ = false;
     bool warned_solver_ = false;
 };

@@ -203,6 +203,60 @@ TEST(Checkpoint, RestartOfBodiesContinuesBitForBit) {
     std::filesystem::remove(file);
 }
 
+TEST(Checkpoint, RestartKeepsPendingImpactsOfBodies) {
+    // Pending impacts of bodies carry their contact in each body frame of the step that found
+    // them: the restarted run must exchange them on the same cells (lumped here: same bodies).
+    const auto file = std::filesystem::temp_directory_path() / "kiln_test_checkpoint_impacts.bin";
+    dynamics::SceneSpec scene = body_pour();
+    scene.record_contact_onsets = true;
+    thermal::HeatSpec heat = pour_heat();
+    heat.collision_conduction = true;
+    heat.materials[0].model = heat::HeatModel::lumped;
+    const auto advance = [](dynamics::System& s, thermal::ThermalSystem& h, int steps) {
+        for (int k = 0; k < steps; ++k) {
+            s.step();
+            h.after_step(s);
+        }
+    };
+    dynamics::System a(scene);
+    thermal::ThermalSystem ha(heat, a);
+    advance(a, ha, 12000);
+    int extra = 0;
+    const auto body_pending = [&] {
+        for (const thermal::PendingImpact& m : ha.save_state().onsets) {
+            for (std::size_t i = 0; i < a.particles().size(); ++i) {
+                if (a.particles().id[i] == m.onset.id_i && a.particles().shape[i] >= 0) {
+                    return true;
+                }
+            }
+        }
+        return false;
+    };
+    while (!body_pending() && extra < 20000) {
+        advance(a, ha, 1);
+        ++extra;
+    }
+    const thermal::ThermalState saved = ha.save_state();
+    ASSERT_TRUE(body_pending()); // the pour has impacts of bodies
+    write_checkpoint(file, a.save_state(), &saved);
+    advance(a, ha, 2000);
+    dynamics::System b(scene);
+    thermal::ThermalSystem hb(heat, b);
+    b.restore_state(read_checkpoint(file));
+    const auto restored = read_checkpoint_heat(file);
+    ASSERT_TRUE(restored.has_value());
+    hb.restore_state(*restored, b);
+    advance(b, hb, 2000);
+    thermal::ParticleTemperatures ta;
+    thermal::ParticleTemperatures tb;
+    ha.particle_temperatures(a, ta);
+    hb.particle_temperatures(b, tb);
+    EXPECT_EQ(ta.mean, tb.mean); // exact equality is the point
+    EXPECT_EQ(ha.thermal_energy(), hb.thermal_energy());
+    EXPECT_GT(ha.collisions(), 0);
+    std::filesystem::remove(file);
+}
+
 TEST(Checkpoint, ForeignFileIsRefused) {
     const auto file = std::filesystem::temp_directory_path() / "kiln_test_not_a_checkpoint.bin";
     {

@@ -1,12 +1,15 @@
 // Collision conduction in the run loop: contact onsets recorded by the sphere kernel, the impact
 // heat of collision_conduction.hpp (Sun & Chen 1988 with Zhou et al.'s c') exchanged once per
 // impact at the next thermal step, conservatively; nothing changes with the flag off.
+#include "common/closed_heat_run.hpp"
 #include "core/error.hpp"
 #include "dynamics/system.hpp"
+#include "geometry/mesh_wall.hpp"
 #include "geometry/shape.hpp"
 #include "heat/collision_conduction.hpp"
 #include "thermal/thermal_system.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <gtest/gtest.h>
@@ -154,19 +157,11 @@ TEST(CollisionRun, ClosedBoxOfCollidingSpheresConservesHeat) {
     const dynamics::SceneSpec s = box(true);
     dynamics::System sys(s);
     ThermalSystem heat(box_heat(s, true), sys);
-    const double e0 = heat.thermal_energy();
-    double drift = 0.0;
-    double lo = 1e300;
-    double hi = -1e300;
-    for (int k = 0; k < 20000; ++k) {
-        sys.step();
-        if (heat.after_step(sys)) {
-            drift = std::max(drift, std::abs(heat.thermal_energy() - e0) / e0);
-            const auto [a, b] = heat.temperature_range();
-            lo = std::min(lo, a);
-            hi = std::max(hi, b);
-        }
-    }
+    const test::ClosedHeatRun run = test::run_closed_heat(sys, heat, 20000);
+    const double e0 = run.initial_energy;
+    const double drift = run.drift;
+    const double lo = run.lowest;
+    const double hi = run.highest;
     std::printf("box: %ld impacts, drift %.3g, range [%.12g, %.12g] K, mean %.6g K\n",
                 heat.collisions(), drift, lo, hi, heat.thermal_energy() / heat.heat_capacity());
     EXPECT_GT(heat.collisions(), 300); // many impacts, or the test proves nothing
@@ -224,7 +219,7 @@ TEST(CollisionRun, FlagOffChangesNothingAndRecordingLeavesTheMechanicsAlone) {
     EXPECT_LT(hot2, hot0);
 }
 
-TEST(CollisionRun, BodiesMeshWallsAndAMissingRecorderAreRefused) {
+TEST(CollisionRun, HotMeshWallsAndAMissingRecorderAreRefused) {
     dynamics::SceneSpec s = empty_scene();
     s.particles.push_back({0, radius, Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
     s.record_contact_onsets = false;
@@ -236,19 +231,22 @@ TEST(CollisionRun, BodiesMeshWallsAndAMissingRecorderAreRefused) {
         EXPECT_NE(std::string(e.what()).find("record_contact_onsets"), std::string::npos);
     }
     s.record_contact_onsets = true;
-    geometry::Superquadric q;
-    q.half_axes = Vec3(2e-3, 2e-3, 3e-3);
-    s.shapes.push_back(geometry::make_template("ellipsoid", q));
-    dynamics::ParticleSpec body;
-    body.shape = 0;
-    body.x = Vec3(0.02, 0, 0);
-    s.particles.push_back(body);
-    dynamics::System with_body(s);
+    // A hot mesh wall: its contacts record no onsets yet.
+    const double l = 0.05;
+    s.mesh_walls.push_back(
+        {"floor",
+         std::make_shared<const geometry::MeshWall>(
+             std::vector<Vec3>{Vec3(-l, -l, -l), Vec3(l, -l, -l), Vec3(l, l, -l), Vec3(-l, l, -l)},
+             std::vector<std::array<int, 3>>{{0, 1, 2}, {0, 2, 3}}, "test floor"),
+         0});
+    dynamics::System with_mesh(s);
+    HeatSpec h = heat_of(s, heat::HeatModel::lumped);
+    h.mesh_wall_temperature = {400.0};
     try {
-        ThermalSystem heat(heat_of(s, heat::HeatModel::lumped), with_body);
-        FAIL() << "accepted collision conduction with a body";
+        ThermalSystem heat(h, with_mesh);
+        FAIL() << "accepted collision conduction with a hot mesh wall";
     } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("not yet for bodies"), std::string::npos);
+        EXPECT_NE(std::string(e.what()).find("not yet for mesh walls"), std::string::npos);
     }
 }
 

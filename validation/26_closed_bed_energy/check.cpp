@@ -5,6 +5,7 @@
 // over patches with the remainder on the last one), so what remains is the linear solver's
 // residual.
 
+#include "common/closed_heat_run.hpp"
 #include "dynamics/system.hpp"
 #include "thermal/thermal_system.hpp"
 #include "validation.hpp"
@@ -27,20 +28,12 @@ TEST(Validation26, ClosedInsulatedBedConservesHeat) {
     const io::CaseSpec spec = load_case();
     dynamics::System sys(spec.scene);
     thermal::ThermalSystem heat(spec.heat, sys);
-    const double e0 = heat.thermal_energy();
     const long steps = std::lround(spec.run.end_time / sys.dt());
-    double drift = 0.0;
-    double lo = 1e300;
-    double hi = -1e300;
-    for (long n = 0; n < steps; ++n) {
-        sys.step();
-        if (heat.after_step(sys)) {
-            drift = std::max(drift, std::abs(heat.thermal_energy() - e0) / e0);
-            const auto [a, b] = heat.temperature_range();
-            lo = std::min(lo, a);
-            hi = std::max(hi, b);
-        }
-    }
+    const test::ClosedHeatRun run = test::run_closed_heat(sys, heat, steps);
+    const double e0 = run.initial_energy;
+    const double drift = run.drift;
+    const double lo = run.lowest;
+    const double hi = run.highest;
     const auto& c = heat.counters();
     record("thermal steps", static_cast<double>(c.thermal_steps), 0, 0, "-");
     record("conducting contacts (sum over steps)", static_cast<double>(c.contacts), 0, 0, "-");

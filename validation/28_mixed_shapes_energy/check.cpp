@@ -6,6 +6,7 @@
 // principle (no temperature leaves the initial range). Clump pairs conduct through every touching
 // member pair, so one body pair can carry several contacts.
 
+#include "common/closed_heat_run.hpp"
 #include "dynamics/system.hpp"
 #include "thermal/thermal_system.hpp"
 #include "validation.hpp"
@@ -30,27 +31,20 @@ TEST(Validation28, MixedShapesInAnInsulatedBoxConserveHeat) {
     for (const std::string& line : heat.describe()) {
         std::printf("  %s\n", line.c_str());
     }
-    const double e0 = heat.thermal_energy();
     const long steps = std::lround(spec.run.end_time / sys.dt());
-    double drift = 0.0;
-    double lo = 1e300;
-    double hi = -1e300;
     long body_contacts = 0; // conducting-contact candidates involving a body, over thermal steps
     std::vector<dynamics::ContactRecord> contacts;
-    for (long n = 0; n < steps; ++n) {
-        sys.step();
-        if (heat.after_step(sys)) {
-            drift = std::max(drift, std::abs(heat.thermal_energy() - e0) / e0);
-            const auto [a, b] = heat.temperature_range();
-            lo = std::min(lo, a);
-            hi = std::max(hi, b);
-            sys.collect_contacts(contacts);
-            const ParticleStore& p = sys.particles();
-            for (const auto& c : contacts) {
-                body_contacts += p.shape[c.i] >= 0 || (!c.wall && p.shape[c.j] >= 0) ? 1 : 0;
-            }
+    const test::ClosedHeatRun run = test::run_closed_heat(sys, heat, steps, [&] {
+        sys.collect_contacts(contacts);
+        const ParticleStore& p = sys.particles();
+        for (const auto& c : contacts) {
+            body_contacts += p.shape[c.i] >= 0 || (!c.wall && p.shape[c.j] >= 0) ? 1 : 0;
         }
-    }
+    });
+    const double e0 = run.initial_energy;
+    const double drift = run.drift;
+    const double lo = run.lowest;
+    const double hi = run.highest;
     const auto& c = heat.counters();
     record("particles", static_cast<double>(sys.particles().size()), 0, 0, "-");
     record("thermal steps", static_cast<double>(c.thermal_steps), 0, 0, "-");

@@ -6,6 +6,7 @@
 // initial range). Validation 28 covers superquadrics and lumped clumps (superquadrics and
 // polyhedra do not meet in one scene yet).
 
+#include "common/closed_heat_run.hpp"
 #include "dynamics/system.hpp"
 #include "thermal/thermal_system.hpp"
 #include "validation.hpp"
@@ -21,7 +22,7 @@ namespace {
 /// resolved solve; over ~1e5 solves the drift stays well below 1e-9 (as validations 26, 28).
 constexpr double energy_tolerance = 1e-9;
 /// Maximum principle (K). Cartesian patches split a contact's heat by each cell's distance to the
-/// partner's temperature (split_weights in thermal_system.cpp), so no cell crosses it within a
+/// partner's temperature (split_weights in thermal_contacts.cpp), so no cell crosses it within a
 /// sub-step and a donor cell at 300 K gives nothing. With the earlier uniform split (per capacity)
 /// the lowest cell dipped 3.3e-4 K below 300 K and the bound had been raised to 1e-3 K; measured
 /// now: 8.9e-12 K (solver tolerance), so the bound is back at 1e-4 K (README, finding 2). A real
@@ -36,11 +37,7 @@ TEST(Validation29, ResolvedClumpsAndPolyhedraInAnInsulatedBoxConserveHeat) {
     for (const std::string& line : heat.describe()) {
         std::printf("  %s\n", line.c_str());
     }
-    const double e0 = heat.thermal_energy();
     const long steps = std::lround(spec.run.end_time / sys.dt());
-    double drift = 0.0;
-    double lo = 1e300;
-    double hi = -1e300;
     long clump_contacts = 0; // contact-steps with a resolved clump / polyhedron on either side
     long polyhedron_contacts = 0;
     std::vector<dynamics::ContactRecord> contacts;
@@ -54,22 +51,19 @@ TEST(Validation29, ResolvedClumpsAndPolyhedraInAnInsulatedBoxConserveHeat) {
                : std::holds_alternative<geometry::ConvexPolyhedron>(shape) ? 2
                                                                            : 0;
     };
-    for (long n = 0; n < steps; ++n) {
-        sys.step();
-        if (heat.after_step(sys)) {
-            drift = std::max(drift, std::abs(heat.thermal_energy() - e0) / e0);
-            const auto [a, b] = heat.temperature_range();
-            lo = std::min(lo, a);
-            hi = std::max(hi, b);
-            sys.collect_contacts(contacts);
-            for (const auto& c : contacts) {
-                const int ki = kind(c.i);
-                const int kj = c.wall ? 0 : kind(c.j);
-                clump_contacts += ki == 1 || kj == 1 ? 1 : 0;
-                polyhedron_contacts += ki == 2 || kj == 2 ? 1 : 0;
-            }
+    const test::ClosedHeatRun run = test::run_closed_heat(sys, heat, steps, [&] {
+        sys.collect_contacts(contacts);
+        for (const auto& c : contacts) {
+            const int ki = kind(c.i);
+            const int kj = c.wall ? 0 : kind(c.j);
+            clump_contacts += ki == 1 || kj == 1 ? 1 : 0;
+            polyhedron_contacts += ki == 2 || kj == 2 ? 1 : 0;
         }
-    }
+    });
+    const double e0 = run.initial_energy;
+    const double drift = run.drift;
+    const double lo = run.lowest;
+    const double hi = run.highest;
     const auto& c = heat.counters();
     record("particles", static_cast<double>(sys.particles().size()), 0, 0, "-");
     record("thermal steps", static_cast<double>(c.thermal_steps), 0, 0, "-");

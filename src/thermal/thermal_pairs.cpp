@@ -1,0 +1,245 @@
+// ThermalSystem: exchanges between neighbours that need not touch or that only touched briefly:
+// gas-gap conduction and radiation between nearby spheres, and the heat of each impact
+// (collision conduction).
+
+#include "thermal/thermal_system_detail.hpp"
+
+#include "thermal/body_shapes.hpp"
+
+#include "core/error.hpp"
+#include "heat/collision_conduction.hpp"
+#include "heat/contact_conduction.hpp"
+#include "heat/gas_conduction.hpp"
+#include "heat/radiation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+
+namespace kiln::thermal {
+
+using namespace detail;
+
+void ThermalSystem::add_gas_gaps(const dynamics::System& sys, std::vector<double>& g_sum,
+                                 double& worst) {
+    if (!(spec_.gas.conductivity > 0.0)) {
+        return;
+    }
+    // Heated spheres only (radius 0 hides the others from the pair search). The search is a cell
+    // list of its own at each thermal step, so the cut-off does not depend on the neighbour list's
+    // skin (by default 0.2 R, well below the seed's gap cut-off of R).
+    const ParticleStore& p = sys.particles();
+    std::vector<double> r(p.size(), 0.0);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        if (p.shape[i] < 0 && by_id_[static_cast<std::size_t>(p.id[i])].slot >= 0) {
+            r[i] = p.radius[i];
+        }
+    }
+    long pairs = 0;
+    for (const heat::NearPair& np : heat::near_sphere_pairs(p.x, r, spec_.gas.cutoff)) {
+        ContactData d;
+        d.a = by_id_[static_cast<std::size_t>(p.id[np.i])];
+        d.b = by_id_[static_cast<std::size_t>(p.id[np.j])];
+        const Vec3 between = p.x[np.j] - p.x[np.i];
+        const double s = between.norm();
+        const double k_a = spec_.materials[static_cast<std::size_t>(d.a.material)].conductivity;
+        const double k_b = spec_.materials[static_cast<std::size_t>(d.b.material)].conductivity;
+        d.conductance = heat::gas_gap_conductance(r[np.i], r[np.j], s, k_a, k_b, spec_.gas);
+        if (!(d.conductance > 0.0)) {
+            continue;
+        }
+        // Resolved spheres take the heat on the patches under the lens r <= r_sf around the
+        // line of centres (world axes = body frame for spheres).
+        const Vec3 n = between / s;
+        const double lens = heat::gas_gap_radius(r[np.i], r[np.j], s, spec_.gas);
+        if (d.a.templ >= 0) {
+            d.patches_a = heat::contact_patches(
+                *templates_[static_cast<std::size_t>(d.a.templ)]->grid, r[np.i] * n, n, lens);
+        }
+        if (d.b.templ >= 0) {
+            d.patches_b = heat::contact_patches(
+                *templates_[static_cast<std::size_t>(d.b.templ)]->grid, -r[np.j] * n, -n, lens);
+        }
+        g_sum[np.i] += d.conductance;
+        g_sum[np.j] += d.conductance;
+        worst = std::max(worst, d.conductance / patch_capacity(d.a, d.patches_a) +
+                                    d.conductance / patch_capacity(d.b, d.patches_b));
+        data_.push_back(std::move(d));
+        ++pairs;
+    }
+    gas_pairs_ += pairs;
+}
+
+void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<double>& g_sum,
+                                  double& worst) {
+    const ParticleStore& p = sys.particles();
+    const auto emissivity = [&](const Record& rec) {
+        return spec_.materials[static_cast<std::size_t>(rec.material)].emissivity;
+    };
+    // Ambient view shares: the whole surface unless neighbours take part of it (below).
+    lumped_view_.assign(lumped_.size(), 1.0);
+    pool_view_.assign(static_cast<std::size_t>(pool_.size()), 1.0);
+    // Heated spheres with an emissivity (others radius 0: left out of the search).
+    std::vector<double> r(p.size(), 0.0);
+    bool any = false;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        const Record& rec = by_id_[static_cast<std::size_t>(p.id[i])];
+        if (p.shape[i] < 0 && rec.slot >= 0 && emissivity(rec) > 0.0) {
+            r[i] = p.radius[i];
+            any = true;
+        }
+    }
+    if (!any) {
+        return;
+    }
+    const auto ambient_view = [&](const Record& rec) -> double& {
+        return rec.templ < 0 ? lumped_view_[static_cast<std::size_t>(rec.slot)]
+                             : pool_view_[static_cast<std::size_t>(rec.slot)];
+    };
+    long pairs = 0;
+    for (const heat::NearPair& np : heat::near_sphere_pairs(p.x, r, spec_.radiation_cutoff)) {
+        ContactData d;
+        d.radiative = true;
+        d.a = by_id_[static_cast<std::size_t>(p.id[np.i])];
+        d.b = by_id_[static_cast<std::size_t>(p.id[np.j])];
+        const Vec3 between = p.x[np.j] - p.x[np.i];
+        const double s = between.norm();
+        // Overlapping (touching) spheres radiate as if just touching.
+        const double apart = std::max(s, r[np.i] + r[np.j]);
+        d.conductance =
+            heat::radiative_coefficient(r[np.i], r[np.j], apart, emissivity(d.a), emissivity(d.b));
+        // What each sees of the partner, it does not see of the ambient (sum of view factors 1).
+        const double af = heat::pair_view_area(r[np.i], r[np.j], apart);
+        ambient_view(d.a) -= af / sphere_area(r[np.i]);
+        ambient_view(d.b) -= af / sphere_area(r[np.j]);
+        // Resolved spheres exchange over the hemisphere facing the partner (world axes = body
+        // frame for spheres): its area-weighted cell temperature, and the heat spread over it.
+        const Vec3 n = between / s;
+        if (d.a.templ >= 0) {
+            d.patches_a = heat::contact_patches(
+                *templates_[static_cast<std::size_t>(d.a.templ)]->grid, r[np.i] * n, n, r[np.i]);
+        }
+        if (d.b.templ >= 0) {
+            d.patches_b = heat::contact_patches(
+                *templates_[static_cast<std::size_t>(d.b.templ)]->grid, -r[np.j] * n, -n, r[np.j]);
+        }
+        // Lag limit with the linearised conductance at the hotter side's current temperature.
+        const double g = heat::radiative_conductance_bound(
+            d.conductance, contact_temperature(d.a, d, false), contact_temperature(d.b, d, true));
+        g_sum[np.i] += g;
+        g_sum[np.j] += g;
+        worst = std::max(worst, g / patch_capacity(d.a, d.patches_a) +
+                                    g / patch_capacity(d.b, d.patches_b));
+        data_.push_back(std::move(d));
+        ++pairs;
+    }
+    radiation_pairs_ += pairs;
+    for (double& v : lumped_view_) {
+        v = std::max(0.0, v); // a crowded bed (the centre estimate of F is low, so rare)
+    }
+    for (double& v : pool_view_) {
+        v = std::max(0.0, v);
+    }
+}
+
+void ThermalSystem::add_collisions(const dynamics::System& sys, std::vector<double>& g_sum,
+                                   double& worst) {
+    if (onsets_.empty()) {
+        return;
+    }
+    const ParticleStore& p = sys.particles();
+    const auto& mats = sys.spec().materials;
+    std::vector<std::int64_t> index(by_id_.size(), -1); // particle index by id (lag limit)
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        index[static_cast<std::size_t>(p.id[i])] = static_cast<std::int64_t>(i);
+    }
+    const auto record_of = [&](std::int64_t id) {
+        const auto k = static_cast<std::size_t>(id);
+        return k < by_id_.size() && index[k] >= 0 ? by_id_[k] : Record{};
+    };
+    long taken = 0;
+    for (const PendingImpact& impact : onsets_) {
+        const dynamics::ContactOnset& e = impact.onset;
+        ContactData d;
+        d.a = record_of(e.id_i);
+        if (d.a.slot < 0 || !(e.speed > 0.0)) {
+            continue; // no heat model (or the particle left), or no approach
+        }
+        int mat_j = 0;
+        if (e.wall >= 0) {
+            d.wall = true;
+            d.wall_temperature = spec_.wall_temperature[static_cast<std::size_t>(e.wall)];
+            if (std::isnan(d.wall_temperature)) {
+                continue; // adiabatic wall
+            }
+            mat_j = sys.spec().walls[static_cast<std::size_t>(e.wall)].material;
+        } else {
+            d.b = record_of(e.id_j);
+            if (d.b.slot < 0) {
+                continue;
+            }
+            mat_j = d.b.material;
+        }
+        const auto side = [&](int m) {
+            const MaterialHeat& h = spec_.materials[static_cast<std::size_t>(m)];
+            return heat::ImpactSide{density_[static_cast<std::size_t>(m)], h.specific_heat,
+                                    h.conductivity};
+        };
+        // The impact itself with the real moduli (real_youngs_modulus where given): duration and
+        // contact radius are physical, as the static law's c maps its radius to the real one.
+        const Material& mi = mats[static_cast<std::size_t>(d.a.material)];
+        const Material& mj = mats[static_cast<std::size_t>(mat_j)];
+        const double ei_real =
+            spec_.materials[static_cast<std::size_t>(d.a.material)].real_youngs_modulus;
+        const double ej_real = spec_.materials[static_cast<std::size_t>(mat_j)].real_youngs_modulus;
+        const double e_eff =
+            effective_modulus(ei_real > 0.0 ? ei_real : mi.youngs_modulus, mi.poisson_ratio,
+                              ej_real > 0.0 ? ej_real : mj.youngs_modulus, mj.poisson_ratio);
+        double energy = 0.0; // J into i per kelvin of T_j - T_i
+        double rc = 0.0;
+        try {
+            const double tc = heat::hertz_impact_duration(e.m_eff, e_eff, e.r_eff, e.speed);
+            rc = heat::hertz_impact_radius(e.m_eff, e_eff, e.r_eff, e.speed);
+            energy = heat::impact_heat(side(d.a.material), side(mat_j), tc, rc, 0.0, 1.0);
+        } catch (const InputError& err) {
+            throw RunError(sys.step_count(),
+                           fmt::format("{} (impact of particle {} at step {}, {:.3g} m/s)",
+                                       err.what(), e.id_i, e.step, e.speed));
+        }
+        // Exchanged over this thermal step as a lagged conductance: with one sub-step the heat
+        // moved is E (T_j - T_i) with the temperatures at the start of the step.
+        d.conductance = energy / dt_;
+        // Resolved particles: the patches under the impact's contact disc around the contact
+        // point, in each body frame of the step that found it (after_step).
+        const auto patches = [&](const Record& r, const double* xp, const double* np) {
+            const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
+            const Vec3 x(xp[0], xp[1], xp[2]);
+            const Vec3 nb(np[0], np[1], np[2]);
+            std::vector<int> out = heat::contact_patches(*t.grid, x, nb, rc);
+            if (!t.spherical) {
+                widen_to_one_cell(*t.grid, t.capacity, t.full_cell_capacity, x, nb, out);
+            }
+            return out;
+        };
+        if (d.a.templ >= 0) {
+            d.patches_a = patches(d.a, impact.x_i, impact.n_i);
+        }
+        if (!d.wall && d.b.templ >= 0) {
+            d.patches_b = patches(d.b, impact.x_j, impact.n_j);
+        }
+        const auto ia = static_cast<std::size_t>(index[static_cast<std::size_t>(e.id_i)]);
+        g_sum[ia] += d.conductance;
+        double pair_rate = d.conductance / patch_capacity(d.a, d.patches_a);
+        if (!d.wall) {
+            g_sum[static_cast<std::size_t>(index[static_cast<std::size_t>(e.id_j)])] +=
+                d.conductance;
+            pair_rate += d.conductance / patch_capacity(d.b, d.patches_b);
+        }
+        worst = std::max(worst, pair_rate);
+        data_.push_back(std::move(d));
+        ++taken;
+    }
+    collisions_ += taken;
+    onsets_.clear();
+}
+} // namespace kiln::thermal
