@@ -261,3 +261,41 @@ TEST(Polyhedron, DISABLED_HullOfAPointSetThatTripsCgalQuickhull) {
         }
     }
 }
+
+TEST(Polyhedron, EqualMomentsGiveAFrameIndependentOfTheVertexOrder) {
+    // A cube (three equal moments) and a square prism rotated off the input axes (two equal
+    // moments): the order of the input points changes the round-off of the inertia tensor, which
+    // used to choose the axes of the degenerate moments. The body-frame vertex set must be the
+    // same for every order: the input frame for the cube; for the prism its distinct axis and the
+    // input axis least aligned with it.
+    std::mt19937 rng(3);
+    const Mat3 turn = random_rotation(rng);
+    const std::vector<std::pair<std::string, std::vector<Vec3>>> shapes{
+        {"cube", box_corners(Vec3::Ones())}, {"prism", [&] {
+                                                  std::vector<Vec3> p =
+                                                      box_corners(Vec3(1.0, 1.0, 2.5));
+                                                  for (Vec3& v : p) {
+                                                      v = turn * v;
+                                                  }
+                                                  return p;
+                                              }()}};
+    for (const auto& [name, pts] : shapes) {
+        const g::ConvexPolyhedron ref = from_points(pts);
+        if (name == "cube") {
+            EXPECT_LT((ref.template_axes - Mat3::Identity()).norm(), kExact);
+        }
+        std::vector<Vec3> shuffled = pts;
+        for (int trial = 0; trial < 6; ++trial) {
+            std::shuffle(shuffled.begin(), shuffled.end(), rng);
+            const g::ConvexPolyhedron p = from_points(shuffled);
+            EXPECT_LT((p.template_axes - ref.template_axes).norm(), kExact) << name << trial;
+            for (const Vec3& v : p.vertices) {
+                double nearest = 1.0;
+                for (const Vec3& w : ref.vertices) {
+                    nearest = std::min(nearest, (v - w).norm());
+                }
+                EXPECT_LT(nearest, kExact) << name << trial;
+            }
+        }
+    }
+}
