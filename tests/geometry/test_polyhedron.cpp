@@ -218,7 +218,7 @@ TEST(Polyhedron, HullOfAPointSetThatTripsCgalQuickhull) {
     // Vertices of a random polyhedron of Yade 2023 (polyhedra_utils.polyhedra, 8 mm, seed 13; m),
     // in Yade's order. Its first three points span a hull face with a fourth point within 1e-18 m
     // of it: CGAL 5.5's quickhull, started from them, erased one list node twice (CGAL issues
-    // 6543, 8625, 8761; a heap use after free that the sanitizer build of this test reports).
+    // 6543, 8625, 8761; a heap use after free that valgrind reports, docs/performance.md).
     // convex_hull starts CGAL from a wide triangle through the body instead.
     const std::vector<std::array<double, 3>> raw = {
         {-0.0037925338691577153, 0.0024623643710816648, 0.0041230810810475851},
