@@ -21,7 +21,10 @@ struct Hull {
 inline constexpr double kHullFlatTolerance = 1e-9;
 
 /// Convex hull of `points` (m). Throws kiln::InputError "<where>: <reason>" for fewer than 4
-/// points, coincident, collinear or coplanar (flat) input.
+/// points, coincident, collinear or coplanar (flat) input. Canonical order: vertices sorted by
+/// (x, y, z), each triangle starting at its smallest vertex index, triangles sorted, so the result
+/// depends on the point set only (not on the input order, CGAL's start or heap addresses), except
+/// for the diagonals chosen in faces with more than three vertices.
 [[nodiscard]] Hull convex_hull(const std::vector<Vec3>& points, const std::string& where);
 
 } // namespace kiln::geometry

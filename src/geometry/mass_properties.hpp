@@ -19,7 +19,11 @@ struct PrincipalFrame {
     Mat3 axes = Mat3::Identity(); ///< columns = principal axes in the integration frame; det = +1
 };
 
-/// Eigen-decomposition of the centroidal inertia (ascending moments, right-handed axes).
+/// Eigen-decomposition of the centroidal inertia (ascending moments, right-handed axes, columns in
+/// the integration frame). Equal moments (within 1e-9 of the largest) leave their axes to a
+/// geometric rule instead of the round-off: all equal, the integration frame itself; two equal, the
+/// distinct axis (sign: first component above 1e-6 positive) and the integration-frame axis least
+/// aligned with it, made normal to it.
 [[nodiscard]] PrincipalFrame principal_frame(const Mat3& inertia_centroid);
 
 } // namespace kiln::geometry

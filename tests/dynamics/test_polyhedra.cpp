@@ -5,8 +5,10 @@
 #include "body_scene.hpp"
 #include "core/error.hpp"
 #include "dynamics/system.hpp"
+#include "geometry/hull.hpp"
 #include "io/shape_reader.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <gtest/gtest.h>
@@ -440,6 +442,113 @@ TEST(Polyhedra, GjkEpaFindsTheContactsOfACommonPlaneBed) {
     // rotation matrix per body, series sine) changed the poses at round-off level. Bound: 40 %.
     EXPECT_GT(lowest, -1e-9);
     EXPECT_LT(worst, 0.4);
+}
+
+} // namespace
+} // namespace kiln::dynamics
+
+namespace kiln::dynamics {
+namespace {
+
+/// Contacts of one physical pair from templates whose input lists the same points in another
+/// order agree to round-off of the 1 mm size (positions 1e-12 relative, normals 1e-12): the
+/// common plane's search and the pair point depend on the geometry only.
+constexpr double kOrderRoundOff = 1e-12;
+/// The same for libccd's EPA, which converges to ~1e-10 of the size (see below).
+constexpr double kEpaOrder = 1e-9;
+
+TEST(Polyhedra, CubeContactDoesNotDependOnTheVertexOrder) {
+    // The cube's inertia is isotropic, so its principal frame was whatever the eigen-solver made
+    // of the round-off, which follows the order of the hull's vertices and faces (validation 31
+    // changed its scenario when the hull's start changed). Now: the same body frame, and the same
+    // contact (overlap, normal, point) from every order, for edge-on and face-on pairs, exactly
+    // aligned (ties between vertices and candidate planes) and tilted.
+    std::vector<Vec3> corners;
+    for (int i = 0; i < 8; ++i) {
+        corners.emplace_back((i & 4) != 0 ? 1e-3 : -1e-3, (i & 2) != 0 ? 1e-3 : -1e-3,
+                             (i & 1) != 0 ? 1e-3 : -1e-3);
+    }
+    std::mt19937 rng(11);
+    std::vector<geometry::ShapeTemplate> shapes;
+    for (int k = 0; k < 6; ++k) {
+        std::shuffle(corners.begin(), corners.end(), rng);
+        const geometry::Hull h = geometry::convex_hull(corners, "cube");
+        shapes.push_back(geometry::make_template(
+            "cube", geometry::make_polyhedron(h.vertices, h.faces, "cube")));
+    }
+    std::vector<geometry::PolyhedronFeatures> features;
+    for (const auto& s : shapes) {
+        features.push_back(
+            geometry::polyhedron_features(std::get<geometry::ConvexPolyhedron>(s.shape)));
+    }
+    // Body frame: the input frame, so the corners are the same points in every order.
+    for (const auto& f : features) {
+        for (const Vec3& v : f.vertices) {
+            EXPECT_LT((v.cwiseAbs() - Vec3::Constant(1e-3)).norm(), kOrderRoundOff * 1e-3);
+        }
+    }
+    const Quat edge_x(Eigen::AngleAxisd(0.25 * std::numbers::pi, Vec3::UnitZ()));
+    const Quat tilt(Eigen::AngleAxisd(0.1, Vec3(0.2, 1.0, 0.4).normalized()));
+    struct Pose {
+        const char* label;
+        Quat qa, qb;
+    };
+    const std::vector<Pose> poses{
+        {"edge-on", edge_x, Quat::Identity()},
+        {"face-on", Quat::Identity(), Quat::Identity()},
+        {"edge-on tilted", tilt * edge_x, tilt.conjugate()},
+        {"face-on tilted", tilt, tilt.conjugate()},
+    };
+    for (const auto& pose : poses) {
+        for (const auto method : {NarrowPhase::newton, NarrowPhase::gjk_epa}) {
+            std::vector<ElementContact> out;
+            for (std::size_t k = 0; k < shapes.size(); ++k) {
+                const auto& cube = std::get<geometry::ConvexPolyhedron>(shapes[k].shape);
+                // b's face that looks most towards -x (world normal nb, offset 1 mm) is placed
+                // 20 um deep into a's support along -nb, the tip 0.2 mm off the face centre so
+                // that the patch is not centred.
+                Vec3 nb = Vec3::UnitX();
+                for (const Vec3& n : features[k].face_normals) {
+                    if ((pose.qb * n).x() < nb.x()) {
+                        nb = pose.qb * n;
+                    }
+                }
+                // a's tip along -nb: the mean of its tied support vertices (the support map
+                // alone returns the first of them, which follows the order).
+                const double h = (-nb).dot(pose.qa * cube.support(pose.qa.conjugate() * -nb));
+                Vec3 tip = Vec3::Zero();
+                int tied = 0;
+                for (const Vec3& v : cube.vertices) {
+                    if ((-nb).dot(pose.qa * v) >= h - kOrderRoundOff * 1e-3) {
+                        tip += pose.qa * v;
+                        ++tied;
+                    }
+                }
+                tip /= tied;
+                const Vec3 xb = tip - (1e-3 - 2e-5) * nb + 0.2e-3 * nb.unitOrthogonal();
+                std::vector<Element> e;
+                append_elements(&shapes[k], &features[k], xb, pose.qb, shapes[k].bounding_radius(),
+                                e);
+                append_elements(&shapes[k], &features[k], Vec3::Zero(), pose.qa,
+                                shapes[k].bounding_radius(), e);
+                out.push_back(element_contact(e[0], e[1], method, nullptr));
+            }
+            // The common plane is exact: the same bits in every order here. EPA stops at its
+            // tolerance and follows the tied support vertices it is given (the first of equal
+            // ones), and the tie band turns a normal change of 1e-14 into a point shift of
+            // ~5e-14 m: its bound is wider.
+            const double tol = method == NarrowPhase::newton ? kOrderRoundOff : kEpaOrder;
+            for (std::size_t k = 0; k < out.size(); ++k) {
+                ASSERT_TRUE(out[k].touching) << pose.label << " order " << k;
+                EXPECT_NEAR(out[k].overlap, out[0].overlap, tol * 1e-3)
+                    << pose.label << " order " << k;
+                EXPECT_LT((out[k].normal - out[0].normal).norm(), tol)
+                    << pose.label << " order " << k;
+                EXPECT_LT((out[k].point - out[0].point).norm(), tol * 1e-3)
+                    << pose.label << " order " << k;
+            }
+        }
+    }
 }
 
 } // namespace

@@ -36,6 +36,34 @@ Quat pointing_down(const Vec3& d) {
     return Quat(Eigen::AngleAxisd(std::atan2(axis.norm(), u.dot(down)), axis.normalized()));
 }
 
+/// Body-frame directions of the features that lead (m for the corner, unit for face and edge).
+struct Leading {
+    Vec3 face;   ///< outward face normal
+    Vec3 edge;   ///< bisector of the normals of two adjacent faces
+    Vec3 corner; ///< a vertex
+};
+
+/// The leading features picked by geometry, not by their index in the template: the face normal
+/// closest to a fixed body direction, the adjacent face normal closest to a second one, the vertex
+/// farthest along a third. So the scenario does not depend on the vertex and face order the hull
+/// happens to produce.
+Leading leading_features(const geometry::PolyhedronFeatures& f) {
+    const auto best = [](const std::vector<Vec3>& v, const Vec3& g, auto&& keep) {
+        const Vec3* out = nullptr;
+        for (const Vec3& x : v) {
+            if (keep(x) && (out == nullptr || x.dot(g) > out->dot(g))) {
+                out = &x;
+            }
+        }
+        return *out;
+    };
+    const auto any = [](const Vec3&) { return true; };
+    const Vec3 n0 = best(f.face_normals, Vec3(0.9, 0.3, 0.1), any);
+    const Vec3 n1 = best(f.face_normals, Vec3(0.1, 0.9, 0.3),
+                         [&](const Vec3& n) { return std::abs(n.dot(n0)) < 0.5; });
+    return {n0, n0 + n1, best(f.vertices, Vec3(0.3, 0.1, 0.9), any)};
+}
+
 struct Drop {
     double max_error = 0;   ///< max |E - E0| / (E0 - E_rest) (-)
     long contact_steps = 0; ///< steps with a wall contact
@@ -68,19 +96,11 @@ TEST(CubeDrop, FaceEdgeAndCornerKeepTheirEnergy) {
     const auto& cube = std::get<geometry::ConvexPolyhedron>(spec.scene.shapes.at(0).shape);
     const geometry::PolyhedronFeatures f = geometry::polyhedron_features(cube);
     ASSERT_EQ(f.face_normals.size(), 6U);
-    // Face: one face normal down. Edge: the bisector of two adjacent faces. Corner: a vertex.
-    const Vec3 n0 = f.face_normals[0];
-    Vec3 n1 = f.face_normals[1];
-    for (const Vec3& n : f.face_normals) {
-        if (std::abs(n.dot(n0)) < 0.5) {
-            n1 = n;
-            break;
-        }
-    }
+    const Leading lead = leading_features(f);
     const std::array<std::pair<std::string, Quat>, 3> cases{
-        {{"face", pointing_down(n0)},
-         {"edge", pointing_down(n0 + n1)},
-         {"corner", pointing_down(f.vertices[0])}}};
+        {{"face", pointing_down(lead.face)},
+         {"edge", pointing_down(lead.edge)},
+         {"corner", pointing_down(lead.corner)}}};
     // A small tilt (0.1 rad) so that the contact is off-centre and the cube rocks and spins: the
     // torques and the rotation update are tested too.
     const Quat tilt(Eigen::AngleAxisd(0.1, Vec3(1.0, 0.3, 0.0).normalized()));
@@ -166,16 +186,10 @@ TEST(CubePair, FaceEdgeAndCornerCollisionsKeepTheirEnergy) {
     const io::CaseSpec spec = load_case();
     const auto& cube = std::get<geometry::ConvexPolyhedron>(spec.scene.shapes.at(0).shape);
     const geometry::PolyhedronFeatures f = geometry::polyhedron_features(cube);
-    const Vec3 n0 = f.face_normals[0];
-    Vec3 n1 = f.face_normals[1];
-    for (const Vec3& n : f.face_normals) {
-        if (std::abs(n.dot(n0)) < 0.5) {
-            n1 = n;
-            break;
-        }
-    }
+    const Leading lead = leading_features(f);
+    const Vec3 n0 = lead.face;
     const std::array<std::pair<std::string, Vec3>, 3> cases{
-        {{"face", n0}, {"edge", n0 + n1}, {"corner", f.vertices[0]}}};
+        {{"face", lead.face}, {"edge", lead.edge}, {"corner", lead.corner}}};
     for (const auto method : {dynamics::NarrowPhase::newton, dynamics::NarrowPhase::gjk_epa}) {
         const std::string tag =
             method == dynamics::NarrowPhase::newton ? "common plane" : "GJK/EPA";
