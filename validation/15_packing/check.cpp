@@ -230,7 +230,7 @@ TEST(Packing, SuperballsPackDenserWithBlockiness) {
     double order = 0.0;
     for (long seed = 1; seed <= m4_seeds; ++seed) {
         const Packing& p = k[static_cast<std::size_t>(seed + 1)];
-        record(fmt::format("superball m = 4, seed {}: solid fraction", seed), p.phi, 0.0, 0.0, "-");
+        record(fmt::format("superball m = 4 seed {}: solid fraction", seed), p.phi, 0.0, 0.0, "-");
         mean += p.phi / m4_seeds;
         order += p.order / m4_seeds;
         EXPECT_LT(p.kinetic_per_weight, settled) << "m = 4, seed " << seed;

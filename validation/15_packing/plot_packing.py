@@ -14,10 +14,16 @@ import matplotlib.pyplot as plt  # noqa: E402
 here = os.path.dirname(os.path.abspath(__file__))
 build = sys.argv[1] if len(sys.argv) > 1 else os.path.join(here, "..", "..", "build")
 phi = {}
+m4_seeds = []  # solid fractions of the m = 4 pours, one per seed
 with open(os.path.join(build, "validation", "15_packing", "results.csv")) as f:
     for row in csv.DictReader(f):
-        if row["quantity"].endswith("solid fraction"):
-            phi[row["quantity"].split(": ")[0]] = float(row["measured"])
+        q = row["quantity"]
+        if q.startswith("superball m = 4 seed"):
+            m4_seeds.append(float(row["measured"]))
+        elif q.endswith("solid fraction"):
+            phi[q.split(": ")[0]] = float(row["measured"])
+        elif q.startswith("superball m = 4: mean solid fraction"):
+            phi["superball m = 4"] = float(row["measured"])
 
 fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.6), sharey=True)
 # Spheroids: aspect ratio. Donev et al. 2004 (Fig. 2, read from the figure, +-0.01).
@@ -33,6 +39,9 @@ ax2.plot([2.0, 5.0], [0.64, 0.82], "s--", color="gray",
          label="Delaney & Cleary 2010 (m = 2 and 5)")
 ax2.plot([2.0, 3.0, 4.0], [phi["spheres"], phi["superball m = 3"], phi["superball m = 4"]], "o-",
          color="C1", label="kiln, poured (this case)")
+if m4_seeds:
+    ax2.plot([4.0] * len(m4_seeds), m4_seeds, ".", color="C1", alpha=0.5,
+             label=f"kiln, m = 4: {len(m4_seeds)} seeds (mean joined)")
 ax2.set_xlabel("superball blockiness m = 2/e")
 ax2.legend(fontsize=8)
 for ax in (ax1, ax2):
