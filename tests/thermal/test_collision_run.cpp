@@ -2,6 +2,7 @@
 // heat of collision_conduction.hpp (Sun & Chen 1988 with Zhou et al.'s c') exchanged once per
 // impact at the next thermal step, conservatively; nothing changes with the flag off.
 #include "common/closed_heat_run.hpp"
+#include "common/collision_heat.hpp"
 #include "core/error.hpp"
 #include "dynamics/system.hpp"
 #include "geometry/mesh_wall.hpp"
@@ -18,42 +19,14 @@
 namespace kiln::thermal {
 namespace {
 
-constexpr double radius = 5e-3;       // m
-constexpr double youngs = 1e8;        // Pa
-constexpr double poisson = 0.3;       // -
-constexpr double density = 2500;      // kg/m^3
-constexpr double specific_heat = 900; // J/(kg K)
-constexpr double conductivity = 1.0;  // W/(m K)
-const heat::ImpactSide side{density, specific_heat, conductivity};
-/// E* of two bodies of the test material (Pa).
-const double e_star = 1.0 / (2.0 * (1.0 - poisson * poisson) / youngs);
-/// The same formula evaluated in another order: rounding only.
-constexpr double formula_tolerance = 1e-12;
+using namespace collision_test;
 
-dynamics::SceneSpec empty_scene() {
-    dynamics::SceneSpec s;
-    s.materials.push_back({"a", youngs, poisson, density, 0.9, 0.3, 0.0});
-    s.gravity = Vec3::Zero();
-    s.time_step = 1e-5;
-    s.expected_speed = 1.0;
-    s.record_contact_onsets = true;
-    return s;
-}
-
+/// The shared collision-heat spec with this file's grid for resolved particles.
 HeatSpec heat_of(const dynamics::SceneSpec& s, heat::HeatModel model) {
-    HeatSpec h;
-    h.enabled = true;
-    h.step_multiple = 1000;
-    h.solver.tolerance = 1e-12;
-    h.collision_conduction = true;
-    MaterialHeat m;
-    m.enabled = true;
-    m.conductivity = conductivity;
-    m.specific_heat = specific_heat;
-    m.initial_temperature = 300;
-    m.model = model;
-    m.spherical = {4, 4, 8};
-    h.materials.assign(s.materials.size(), m);
+    HeatSpec h = collision_heat(s, model);
+    for (MaterialHeat& m : h.materials) {
+        m.spherical = {4, 4, 8};
+    }
     return h;
 }
 
