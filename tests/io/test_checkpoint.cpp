@@ -73,16 +73,46 @@ thermal::HeatSpec pour_heat() {
     return h;
 }
 
+/// Runs `steps` mechanical steps with the heat after each.
+void advance(dynamics::System& s, thermal::ThermalSystem& h, int steps) {
+    for (int k = 0; k < steps; ++k) {
+        s.step();
+        h.after_step(s);
+    }
+}
+
+/// Checkpoints run a (with heat ha, whose state `saved` holds pending impacts) to `file`, runs on
+/// `steps`, restarts a second run from the file and runs it as far: temperatures and heat must
+/// agree exactly, and the impacts must have been exchanged.
+void expect_restart_keeps_pending_impacts(const dynamics::SceneSpec& scene,
+                                          const thermal::HeatSpec& heat,
+                                          const std::filesystem::path& file, dynamics::System& a,
+                                          thermal::ThermalSystem& ha,
+                                          const thermal::ThermalState& saved, int steps) {
+    write_checkpoint(file, a.save_state(), &saved);
+    advance(a, ha, steps);
+    dynamics::System b(scene);
+    thermal::ThermalSystem hb(heat, b);
+    b.restore_state(read_checkpoint(file));
+    const auto restored = read_checkpoint_heat(file);
+    ASSERT_TRUE(restored.has_value());
+    EXPECT_EQ(restored->onsets.size(), saved.onsets.size());
+    hb.restore_state(*restored, b);
+    advance(b, hb, steps);
+    thermal::ParticleTemperatures ta;
+    thermal::ParticleTemperatures tb;
+    ha.particle_temperatures(a, ta);
+    hb.particle_temperatures(b, tb);
+    EXPECT_EQ(ta.mean, tb.mean); // exact equality is the point
+    EXPECT_EQ(ha.thermal_energy(), hb.thermal_energy());
+    EXPECT_GT(ha.collisions(), 0);
+    std::filesystem::remove(file);
+}
+
 TEST(Checkpoint, RestartContinuesTemperaturesBitForBit) {
     const auto file = std::filesystem::temp_directory_path() / "kiln_test_checkpoint_heat.bin";
     dynamics::System a(pour());
     thermal::ThermalSystem ha(pour_heat(), a);
-    const auto advance = [](dynamics::System& s, thermal::ThermalSystem& h, int steps) {
-        for (int k = 0; k < steps; ++k) {
-            s.step();
-            h.after_step(s);
-        }
-    };
     advance(a, ha, 3000);
     const thermal::ThermalState saved = ha.save_state();
     write_checkpoint(file, a.save_state(), &saved);
@@ -119,12 +149,6 @@ TEST(Checkpoint, RestartKeepsPendingImpactsOfCollisionConduction) {
     heat.collision_conduction = true;
     dynamics::System a(scene);
     thermal::ThermalSystem ha(heat, a);
-    const auto advance = [](dynamics::System& s, thermal::ThermalSystem& h, int steps) {
-        for (int k = 0; k < steps; ++k) {
-            s.step();
-            h.after_step(s);
-        }
-    };
     advance(a, ha, 3000);
     int extra = 0;
     while (ha.save_state().onsets.empty() && extra < 20000) {
@@ -133,24 +157,7 @@ TEST(Checkpoint, RestartKeepsPendingImpactsOfCollisionConduction) {
     }
     const thermal::ThermalState saved = ha.save_state();
     ASSERT_FALSE(saved.onsets.empty()); // the pour has impacts
-    write_checkpoint(file, a.save_state(), &saved);
-    advance(a, ha, 3000);
-    dynamics::System b(scene);
-    thermal::ThermalSystem hb(heat, b);
-    b.restore_state(read_checkpoint(file));
-    const auto restored = read_checkpoint_heat(file);
-    ASSERT_TRUE(restored.has_value());
-    EXPECT_EQ(restored->onsets.size(), saved.onsets.size());
-    hb.restore_state(*restored, b);
-    advance(b, hb, 3000);
-    thermal::ParticleTemperatures ta;
-    thermal::ParticleTemperatures tb;
-    ha.particle_temperatures(a, ta);
-    hb.particle_temperatures(b, tb);
-    EXPECT_EQ(ta.mean, tb.mean); // exact equality is the point
-    EXPECT_EQ(ha.thermal_energy(), hb.thermal_energy());
-    EXPECT_GT(ha.collisions(), 0);
-    std::filesystem::remove(file);
+    expect_restart_keeps_pending_impacts(scene, heat, file, a, ha, saved, 3000);
 }
 
 /// A pour of clumps and superquadrics onto spheres in a tube.
@@ -212,12 +219,6 @@ TEST(Checkpoint, RestartKeepsPendingImpactsOfBodies) {
     thermal::HeatSpec heat = pour_heat();
     heat.collision_conduction = true;
     heat.materials[0].model = heat::HeatModel::lumped;
-    const auto advance = [](dynamics::System& s, thermal::ThermalSystem& h, int steps) {
-        for (int k = 0; k < steps; ++k) {
-            s.step();
-            h.after_step(s);
-        }
-    };
     dynamics::System a(scene);
     thermal::ThermalSystem ha(heat, a);
     advance(a, ha, 12000);
@@ -238,23 +239,7 @@ TEST(Checkpoint, RestartKeepsPendingImpactsOfBodies) {
     }
     const thermal::ThermalState saved = ha.save_state();
     ASSERT_TRUE(body_pending()); // the pour has impacts of bodies
-    write_checkpoint(file, a.save_state(), &saved);
-    advance(a, ha, 2000);
-    dynamics::System b(scene);
-    thermal::ThermalSystem hb(heat, b);
-    b.restore_state(read_checkpoint(file));
-    const auto restored = read_checkpoint_heat(file);
-    ASSERT_TRUE(restored.has_value());
-    hb.restore_state(*restored, b);
-    advance(b, hb, 2000);
-    thermal::ParticleTemperatures ta;
-    thermal::ParticleTemperatures tb;
-    ha.particle_temperatures(a, ta);
-    hb.particle_temperatures(b, tb);
-    EXPECT_EQ(ta.mean, tb.mean); // exact equality is the point
-    EXPECT_EQ(ha.thermal_energy(), hb.thermal_energy());
-    EXPECT_GT(ha.collisions(), 0);
-    std::filesystem::remove(file);
+    expect_restart_keeps_pending_impacts(scene, heat, file, a, ha, saved, 2000);
 }
 
 TEST(Checkpoint, ForeignFileIsRefused) {
