@@ -1,3 +1,4 @@
+#include "common/cube_template.hpp"
 #include "core/error.hpp"
 #include "dynamics/system.hpp"
 #include "geometry/clump.hpp"
@@ -500,20 +501,9 @@ geometry::ShapeTemplate dumbbell(double r) {
         geometry::make_clump({{Vec3(0, 0, -0.8 * r), r}, {Vec3(0, 0, 0.8 * r), r}}, "test"));
 }
 
-/// Cube of edge 2 a (12 outward triangles) as a polyhedron template.
+/// Cube of edge 2 a (tests/common/cube_template.hpp).
 geometry::ShapeTemplate cube(double a) {
-    std::vector<Vec3> v;
-    for (int k = 0; k < 8; ++k) {
-        v.emplace_back((k & 1) ? a : -a, (k & 2) ? a : -a, (k & 4) ? a : -a);
-    }
-    const std::vector<std::array<int, 4>> quads = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                                                   {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    std::vector<std::array<int, 3>> f;
-    for (const auto& q : quads) {
-        f.push_back({q[0], q[1], q[2]});
-        f.push_back({q[0], q[2], q[3]});
-    }
-    return geometry::make_template("cube", geometry::make_polyhedron(v, f, "test"));
+    return test::cube_template(a);
 }
 
 /// Runs `steps` mechanical steps with heat; returns the largest relative drift of sum C T.
