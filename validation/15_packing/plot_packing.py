@@ -18,9 +18,9 @@ m4_seeds = []  # solid fractions of the m = 4 pours, one per seed
 with open(os.path.join(build, "validation", "15_packing", "results.csv")) as f:
     for row in csv.DictReader(f):
         q = row["quantity"]
-        if q.startswith("superball m = 4 seed"):
+        if q.startswith("superball m = 4 seed") and q.endswith("solid fraction"):
             m4_seeds.append(float(row["measured"]))
-        elif q.endswith("solid fraction"):
+        elif q.endswith("solid fraction") and "seed" not in q:
             phi[q.split(": ")[0]] = float(row["measured"])
         elif q.startswith("superball m = 4: mean solid fraction"):
             phi["superball m = 4"] = float(row["measured"])
