@@ -1,5 +1,6 @@
 // Heat shapes of polyhedra and clumps: planes, surface triangulations and cut-cell grids.
 
+#include "common/cube_template.hpp"
 #include "core/error.hpp"
 #include "heat/cartesian_grid.hpp"
 
@@ -16,19 +17,8 @@ constexpr double roundoff = 1e-12;
 
 /// Closed cube [-a, a]^3 as 12 outward triangles, turned by `q` (body frame of the polyhedron).
 ConvexPolyhedron cube(double a, const Quat& q = Quat::Identity()) {
-    std::vector<Vec3> v;
-    for (int k = 0; k < 8; ++k) {
-        v.push_back(q * Vec3((k & 1) ? a : -a, (k & 2) ? a : -a, (k & 4) ? a : -a));
-    }
-    // Faces as quads (outward counter-clockwise), split into two triangles each.
-    const std::vector<std::array<int, 4>> quads = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                                                   {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    std::vector<std::array<int, 3>> f;
-    for (const auto& qd : quads) {
-        f.push_back({qd[0], qd[1], qd[2]});
-        f.push_back({qd[0], qd[2], qd[3]});
-    }
-    return make_convex_polyhedron(v, f);
+    const test::TriangleMesh m = test::cube_mesh(a, q);
+    return make_convex_polyhedron(m.vertices, m.triangles);
 }
 
 TEST(PolyhedronShape, CubeHasSixPlanesExactGeometryAndTheBoxGrid) {

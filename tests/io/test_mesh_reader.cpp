@@ -1,6 +1,7 @@
 // Polyhedron templates from .obj and .stl: ASCII and binary STL give the same solid as OBJ,
 // non-convex input is replaced by its hull with a warning, degenerate files are refused by name.
 
+#include "common/cube_template.hpp"
 #include "core/error.hpp"
 #include "io/mesh_reader.hpp"
 #include "io/shape_reader.hpp"
@@ -33,18 +34,18 @@ void write_text(const fs::path& f, const std::string& text) {
     std::ofstream(f) << text;
 }
 
-/// Box [0,1]x[0,2]x[0,3] as 12 outward triangles.
+/// Box [0,1]x[0,2]x[0,3] as 12 outward triangles: the test cube [-1, 1]^3 moved and stretched
+/// (its corners land exactly on 0, 1, 2 and 3).
 std::vector<std::array<Vec3, 3>> box_triangles() {
-    const auto c = [](int i) {
-        return Vec3(i & 1 ? 1.0 : 0.0, i & 2 ? 2.0 : 0.0, i & 4 ? 3.0 : 0.0);
+    const kiln::test::TriangleMesh m = kiln::test::cube_mesh(1.0);
+    const auto c = [&](int i) {
+        return ((m.vertices[static_cast<std::size_t>(i)] + Vec3::Ones()) / 2)
+            .cwiseProduct(Vec3(1.0, 2.0, 3.0))
+            .eval();
     };
-    // Quads (counter-clockwise seen from outside) of the corner numbering above.
-    const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                             {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
     std::vector<std::array<Vec3, 3>> t;
-    for (const auto& q : quads) {
-        t.push_back({c(q[0]), c(q[1]), c(q[2])});
-        t.push_back({c(q[0]), c(q[2]), c(q[3])});
+    for (const auto& f : m.triangles) {
+        t.push_back({c(f[0]), c(f[1]), c(f[2])});
     }
     return t;
 }

@@ -6,6 +6,7 @@
 // against the slab product; a three-sphere clump against its finest grid, with its volume and
 // area against the geometry template's union volume and exposed area.
 
+#include "common/cube_template.hpp"
 #include "geometry/clump.hpp"
 #include "geometry/shape.hpp"
 #include "geometry/shape_metrics.hpp"
@@ -149,18 +150,8 @@ std::vector<ThetaSample> cube_exact(double bi) {
 
 /// Cube of half edge `a` as 12 outward triangles, every vertex turned by q.
 heat::ConvexPolyhedron turned_cube(double a, const Quat& q) {
-    std::vector<Vec3> v;
-    for (int k = 0; k < 8; ++k) {
-        v.push_back(q * Vec3((k & 1) ? a : -a, (k & 2) ? a : -a, (k & 4) ? a : -a));
-    }
-    const std::vector<std::array<int, 4>> quads = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                                                   {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    std::vector<std::array<int, 3>> f;
-    for (const auto& qd : quads) {
-        f.push_back({qd[0], qd[1], qd[2]});
-        f.push_back({qd[0], qd[2], qd[3]});
-    }
-    return heat::make_convex_polyhedron(v, f);
+    const test::TriangleMesh m = test::cube_mesh(a, q);
+    return heat::make_convex_polyhedron(m.vertices, m.triangles);
 }
 
 TEST(BodyConvection, TurnedPolyhedronCubeAgainstProductOfSlabSolutions) {
