@@ -142,6 +142,21 @@ struct BodyContactArrays {
     }
 };
 
+/// The checkpoint file opened for reading, positioned after its magic bytes; refuses a file that
+/// cannot be opened or is not a kiln checkpoint.
+std::ifstream open_checkpoint(const std::filesystem::path& file) {
+    std::ifstream f(file, std::ios::binary);
+    if (!f) {
+        throw InputError(file.string(), 0, "", "cannot open the checkpoint file");
+    }
+    char m[sizeof magic] = {};
+    f.read(m, sizeof m);
+    if (!f || std::memcmp(m, magic, sizeof magic) != 0) {
+        throw InputError(file.string(), 0, "", "not a kiln checkpoint (wrong magic bytes)");
+    }
+    return f;
+}
+
 } // namespace
 
 /// Tag of the optional heat section after the mechanical state.
@@ -165,15 +180,7 @@ void write_checkpoint(const std::filesystem::path& file, const dynamics::SystemS
 }
 
 std::optional<thermal::ThermalState> read_checkpoint_heat(const std::filesystem::path& file) {
-    std::ifstream f(file, std::ios::binary);
-    if (!f) {
-        throw InputError(file.string(), 0, "", "cannot open the checkpoint file");
-    }
-    char m[sizeof magic] = {};
-    f.read(m, sizeof m);
-    if (!f || std::memcmp(m, magic, sizeof magic) != 0) {
-        throw InputError(file.string(), 0, "", "not a kiln checkpoint (wrong magic bytes)");
-    }
+    std::ifstream f = open_checkpoint(file);
     dynamics::SystemState s;
     In in(f, file.string());
     fields(in, s, s.particles);
@@ -239,15 +246,7 @@ void write_checkpoint(const std::filesystem::path& file, const dynamics::SystemS
 }
 
 dynamics::SystemState read_checkpoint(const std::filesystem::path& file) {
-    std::ifstream f(file, std::ios::binary);
-    if (!f) {
-        throw InputError(file.string(), 0, "", "cannot open the checkpoint file");
-    }
-    char m[sizeof magic] = {};
-    f.read(m, sizeof m);
-    if (!f || std::memcmp(m, magic, sizeof magic) != 0) {
-        throw InputError(file.string(), 0, "", "not a kiln checkpoint (wrong magic bytes)");
-    }
+    std::ifstream f = open_checkpoint(file);
     dynamics::SystemState s;
     In in(f, file.string());
     fields(in, s, s.particles);
