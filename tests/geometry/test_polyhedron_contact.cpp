@@ -2,15 +2,11 @@
 // edge-face and edge-edge cases with their patches, continuity from edge-on to face-on, optimality
 // of the plane against sampled directions and against libccd's EPA, pair-order symmetry.
 
+#include "common/fcl_reference.hpp"
 #include "geometry/hull.hpp"
 #include "geometry/polyhedron.hpp"
 #include "geometry/polyhedron_contact.hpp"
 #include "io/shape_reader.hpp"
-
-#include <fcl/geometry/shape/convex.h>
-#include <fcl/narrowphase/collision.h>
-#include <fcl/narrowphase/collision_object.h>
-#include <fcl/narrowphase/distance.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
@@ -356,67 +352,9 @@ TEST(PolyhedronContact, PlaneIsOptimalAndAgreesWithEpa) {
     std::printf("%d pairs: largest |EPA - common plane| = %.3g of r_A + r_B\n", pairs, worst_epa);
 }
 
-/// FCL's convex shape of a polyhedron (body frame), lengths divided by `unit` (FCL's GJK/EPA
-/// tolerances are absolute, 1e-6).
-std::shared_ptr<fcl::Convexd> to_fcl(const g::ConvexPolyhedron& p, double unit) {
-    auto v = std::make_shared<std::vector<fcl::Vector3d>>();
-    for (const Vec3& x : p.vertices) {
-        v->push_back(x / unit);
-    }
-    auto f = std::make_shared<std::vector<int>>();
-    for (const auto& t : p.faces) {
-        f->insert(f->end(), {3, t[0], t[1], t[2]});
-    }
-    return std::make_shared<fcl::Convexd>(v, static_cast<int>(p.faces.size()), f);
-}
-
-/// The two FCL paths that report a penetration depth for two Convex shapes (FCL 0.7).
-enum class FclPath {
-    kMpr,           ///< fcl::collide with GST_LIBCCD: libccd's MPR, an upper bound of the MTD
-    kSignedDistance ///< fcl::distance with signed distance: FCL's GJK + EPA port, the MTD
-};
-
-/// FCL's penetration depth and normal (from B to A); the shapes were built with lengths divided by
-/// `unit` (FCL's tolerances are absolute, 1e-6).
-g::ConvexContact fcl_contact(const std::shared_ptr<fcl::Convexd>& sa, const g::PosedPolyhedron& a,
-                             const std::shared_ptr<fcl::Convexd>& sb, const g::PosedPolyhedron& b,
-                             double unit, FclPath path) {
-    fcl::Transform3d ta = fcl::Transform3d::Identity();
-    ta.linear() = a.q.toRotationMatrix();
-    fcl::Transform3d tb = fcl::Transform3d::Identity();
-    tb.linear() = b.q.toRotationMatrix();
-    tb.translation() = (b.x - a.x) / unit;
-    g::ConvexContact c;
-    const fcl::CollisionObjectd oa(sa, ta);
-    const fcl::CollisionObjectd ob(sb, tb);
-    if (path == FclPath::kSignedDistance) {
-        // Signed distance through FCL's GJK/EPA port of libccd (the only FCL path that gives the
-        // penetration depth of two Convex shapes as an MTD).
-        fcl::DistanceRequestd req(true);
-        req.enable_signed_distance = true;
-        req.gjk_solver_type = fcl::GST_LIBCCD;
-        fcl::DistanceResultd res;
-        fcl::distance(&oa, &ob, req, res);
-        if (!(res.min_distance < 0.0)) {
-            return c;
-        }
-        c.touching = true;
-        c.depth = -res.min_distance * unit;
-        c.normal = (res.nearest_points[1] - res.nearest_points[0]).normalized();
-        return c;
-    }
-    fcl::CollisionRequestd req(1, true);
-    req.gjk_solver_type = fcl::GST_LIBCCD;
-    fcl::CollisionResultd res;
-    fcl::collide(&oa, &ob, req, res);
-    if (res.numContacts() == 0) {
-        return c;
-    }
-    c.touching = true;
-    c.depth = res.getContact(0).penetration_depth * unit;
-    c.normal = -res.getContact(0).normal; // FCL's normal points from o1 (A) to o2 (B)
-    return c;
-}
+using kiln::test::fcl_contact;
+using kiln::test::FclPath;
+using kiln::test::to_fcl;
 
 TEST(PolyhedronContact, AgreesWithFcl) {
     // FCL's signed distance (GJK + EPA) must agree to EPA precision and never exceed the common

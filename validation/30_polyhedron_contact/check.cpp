@@ -4,16 +4,13 @@
 // and its collide, which runs libccd's MPR, an upper bound) must give the same overlap and normal
 // over thousands of random overlapping pose pairs of each shipped polyhedron. See README.md.
 
+#include "common/fcl_reference.hpp"
 #include "geometry/polyhedron_contact.hpp"
 #include "io/shape_reader.hpp"
 #include "validation.hpp"
 
 #include <algorithm>
 #include <cmath>
-#include <fcl/geometry/shape/convex.h>
-#include <fcl/narrowphase/collision.h>
-#include <fcl/narrowphase/collision_object.h>
-#include <fcl/narrowphase/distance.h>
 #include <gtest/gtest.h>
 #include <random>
 
@@ -42,58 +39,14 @@ struct Shape {
     g::PolyhedronFeatures features;
 };
 
-/// FCL's convex shape of a polyhedron with lengths divided by `unit`: FCL's GJK/EPA tolerances are
-/// absolute (1e-6), so each pair is handed to FCL in units of r_A + r_B.
-std::shared_ptr<fcl::Convexd> to_fcl(const g::ConvexPolyhedron& p, double unit) {
-    auto v = std::make_shared<std::vector<fcl::Vector3d>>();
-    for (const Vec3& x : p.vertices) {
-        v->push_back(x / unit);
-    }
-    auto f = std::make_shared<std::vector<int>>();
-    for (const auto& t : p.faces) {
-        f->insert(f->end(), {3, t[0], t[1], t[2]});
-    }
-    return std::make_shared<fcl::Convexd>(v, static_cast<int>(p.faces.size()), f);
-}
+using test::FclPath;
 
-/// The two FCL 0.7 paths that report a penetration depth for two Convex shapes.
-enum class FclPath {
-    kMpr,           ///< fcl::collide, GST_LIBCCD: libccd's MPR, an upper bound of the MTD
-    kSignedDistance ///< fcl::distance with signed distance: FCL's GJK + EPA port, the MTD
-};
-
-/// FCL penetration depth (m) and normal from B to A, or depth < 0 when FCL finds no contact.
-std::pair<double, Vec3> fcl_contact(const Shape& sa, const g::PosedPolyhedron& a, const Shape& sb,
-                                    const g::PosedPolyhedron& b, FclPath path) {
+/// FCL's depth and normal from B to A for the pair, handed to FCL in units of r_A + r_B.
+g::ConvexContact fcl_contact(const Shape& sa, const g::PosedPolyhedron& a, const Shape& sb,
+                             const g::PosedPolyhedron& b, FclPath path) {
     const double unit = sa.features.radius + sb.features.radius;
-    fcl::Transform3d ta = fcl::Transform3d::Identity();
-    ta.linear() = a.q.toRotationMatrix();
-    fcl::Transform3d tb = fcl::Transform3d::Identity();
-    tb.linear() = b.q.toRotationMatrix();
-    tb.translation() = (b.x - a.x) / unit;
-    const fcl::CollisionObjectd oa(to_fcl(sa.poly, unit), ta);
-    const fcl::CollisionObjectd ob(to_fcl(sb.poly, unit), tb);
-    if (path == FclPath::kSignedDistance) {
-        fcl::DistanceRequestd req(true);
-        req.enable_signed_distance = true;
-        req.gjk_solver_type = fcl::GST_LIBCCD;
-        fcl::DistanceResultd res;
-        fcl::distance(&oa, &ob, req, res);
-        if (!(res.min_distance < 0.0)) {
-            return {-1.0, Vec3::Zero()};
-        }
-        return {-res.min_distance * unit,
-                (res.nearest_points[1] - res.nearest_points[0]).normalized()};
-    }
-    fcl::CollisionRequestd req(1, true);
-    req.gjk_solver_type = fcl::GST_LIBCCD;
-    fcl::CollisionResultd res;
-    fcl::collide(&oa, &ob, req, res);
-    if (res.numContacts() == 0) {
-        return {-1.0, Vec3::Zero()};
-    }
-    // FCL's normal points from o1 (A) to o2 (B).
-    return {res.getContact(0).penetration_depth * unit, -res.getContact(0).normal.normalized()};
+    return test::fcl_contact(test::to_fcl(sa.poly, unit), a, test::to_fcl(sb.poly, unit), b, unit,
+                             path);
 }
 
 /// Overlap along a normal m from B to A: h_A(-m) + h_B(m) (m).
@@ -136,8 +89,7 @@ void compare(const Shape& sa, const Shape& sb, std::mt19937_64& rng, Tally& t) {
         // Overlapping supports along u do not imply overlapping bodies at sharp vertices: then all
         // methods must agree that the pair is apart.
         ++t.apart;
-        const auto [fd, fn] = fcl_contact(sa, a, sb, b, FclPath::kSignedDistance);
-        if (e.touching || fd >= 0.0) {
+        if (e.touching || fcl_contact(sa, a, sb, b, FclPath::kSignedDistance).touching) {
             ++t.cp_misses;
         }
         return;
@@ -160,20 +112,20 @@ void compare(const Shape& sa, const Shape& sb, std::mt19937_64& rng, Tally& t) {
         t.worst_angle = std::max(t.worst_angle, angle);
         t.tilted += angle > 1e-3 ? 1 : 0;
     }
-    const auto [fd, fn] = fcl_contact(sa, a, sb, b, FclPath::kSignedDistance);
-    const auto [md, mn] = fcl_contact(sa, a, sb, b, FclPath::kMpr);
-    if (fd < 0.0 || md < 0.0) {
+    const g::ConvexContact f = fcl_contact(sa, a, sb, b, FclPath::kSignedDistance);
+    const g::ConvexContact m = fcl_contact(sa, a, sb, b, FclPath::kMpr);
+    if (!f.touching || !m.touching) {
         ++t.fcl_failures;
     }
-    if (fd >= 0.0) {
-        t.worst_fcl = std::max(t.worst_fcl, std::abs(fd - c.depth) / unit);
-        t.worst_normal = std::max(t.worst_normal, (overlap_along(a, b, fn) - c.depth) / unit);
+    if (f.touching) {
+        t.worst_fcl = std::max(t.worst_fcl, std::abs(f.depth - c.depth) / unit);
+        t.worst_normal = std::max(t.worst_normal, (overlap_along(a, b, f.normal) - c.depth) / unit);
         t.worst_fcl_angle =
-            std::max(t.worst_fcl_angle, std::acos(std::clamp(fn.dot(c.normal), -1.0, 1.0)));
+            std::max(t.worst_fcl_angle, std::acos(std::clamp(f.normal.dot(c.normal), -1.0, 1.0)));
     }
-    if (md >= 0.0) {
-        t.worst_mpr = std::max(t.worst_mpr, (md - c.depth) / unit);
-        t.mpr_below += md < c.depth - 1e-12 * unit ? 1 : 0;
+    if (m.touching) {
+        t.worst_mpr = std::max(t.worst_mpr, (m.depth - c.depth) / unit);
+        t.mpr_below += m.depth < c.depth - 1e-12 * unit ? 1 : 0;
     }
 }
 
