@@ -22,19 +22,22 @@ liggghts_prepare() {
 
 # liggghts_run_pair N INPUT CASE [FILE ...]: in $work/nN, runs LIGGGHTS on INPUT (with -var N and
 # -var steps) and kiln on CASE (its `count` and `end_time` lines rewritten), one after the other;
-# FILEs are copied next to them. Appends "N:dir" to the array `results`.
+# FILEs are copied next to them. Each run's user, system and wall seconds of the whole process
+# (start-up and insertion included) go to liggghts.time and kiln.time. Appends "N:dir" to the
+# array `results`.
 liggghts_run_pair() {
     local n="$1" input="$2" case="$3"
     shift 3
     local dir="$work/n$n"
     mkdir -p "$dir"
     cp "$input" "$@" "$dir/"
-    (cd "$dir" && OMP_NUM_THREADS=1 liggghts -in "$(basename "$input")" -var N "$n" \
-        -var steps "$steps" -log log.liggghts > liggghts.out 2>&1) ||
+    (cd "$dir" && OMP_NUM_THREADS=1 /usr/bin/time -f '%U %S %e' -o liggghts.time \
+        liggghts -in "$(basename "$input")" -var N "$n" -var steps "$steps" -log log.liggghts \
+        > liggghts.out 2>&1) ||
         { echo "LIGGGHTS failed, see $dir" >&2; exit 1; }
     sed -e "s/^count = .*/count = $n/" -e "s/^end_time = .*/end_time = $end_time/" \
         "$case" > "$dir/case.toml"
-    (cd "$dir" && OMP_NUM_THREADS="${KILN_THREADS:-1}" "$kiln" run case.toml --out kiln \
-        > kiln.out 2>&1) || { echo "kiln failed, see $dir" >&2; exit 1; }
+    (cd "$dir" && OMP_NUM_THREADS="${KILN_THREADS:-1}" /usr/bin/time -f '%U %S %e' -o kiln.time \
+        "$kiln" run case.toml --out kiln > kiln.out 2>&1) || { echo "kiln failed, see $dir" >&2; exit 1; }
     results+=("$n:$dir")
 }
