@@ -181,6 +181,26 @@ class ThermalSystem {
     /// the cut-off to data_, adding its conductances to `g_sum` (W/K, by particle index) and its
     /// pair rate to `worst` (1/s) for the lag limit. Nothing without gas.
     void add_gas_gaps(const dynamics::System& sys, std::vector<double>& g_sum, double& worst);
+    /// Gas-gap exchanges of particle indices i and j, at least one a body (thermal_body_pairs.cpp):
+    /// one copy of `base` (records set) with conductance and patches per element pair within the
+    /// cut-off, into `out` (cleared first).
+    void body_gas_gaps(const dynamics::System& sys, std::size_t i, std::size_t j,
+                       const ContactData& base, std::vector<ContactData>& out) const;
+    /// Radiative exchange of particle indices i and j with emissivities e_i, e_j, at least one a
+    /// body: coefficient and patches into `d`, the pair's view area (m^2) and each side's
+    /// radiating area (m^2); false beyond radiation_cutoff.
+    bool body_radiation(const dynamics::System& sys, std::size_t i, std::size_t j, double e_i,
+                        double e_j, ContactData& d, double& view_area, double& area_i,
+                        double& area_j) const;
+    /// Patches of resolved particle index k (record r) facing the world direction `n` within
+    /// `radius` (m) of the axis through the world point `point` (m), widened on Cartesian grids.
+    [[nodiscard]] std::vector<int> gap_patches(const dynamics::System& sys, const Record& r,
+                                               std::size_t k, const Vec3& point, const Vec3& n,
+                                               double radius) const;
+    /// Radius of particle index k (m): a sphere's own; a body's volume- (by_area false) or
+    /// area-equivalent (true) sphere radius.
+    [[nodiscard]] double equivalent_radius(const dynamics::System& sys, std::size_t k,
+                                           bool by_area) const;
     /// Appends the radiative exchange of every pair of heated spheres with emissivities > 0 within
     /// radiation_cutoff to data_ (coefficient K, W/K^4), with the linearised conductance
     /// 4 K T^3 in `g_sum` and `worst` for the lag limit. Nothing without emissivities.

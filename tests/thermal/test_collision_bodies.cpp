@@ -13,6 +13,7 @@
 #include "heat/collision_conduction.hpp"
 #include "thermal/thermal_system.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -136,6 +137,44 @@ TEST(CollisionBodies, RoundSuperquadricOnAHotWallTakesTheWallImpactHeat) {
     const double e = heat::impact_heat(side, side, tc, rc, 0.0, 500.0);
     EXPECT_NEAR(heat.external_heat(), e, formula_tolerance * e);
     EXPECT_NEAR(m * specific_heat * heat.mean_temperature(sys, 0), e, formula_tolerance * e);
+}
+
+TEST(CollisionBodies, ABodyAddedDuringTheRunRecordsItsFirstImpact) {
+    // The round superquadric above, added after 10 steps 5 um above the hot floor at 0.8 m/s:
+    // it touches in its first step (dt 1e-5 s), which records the impact as for a placed body.
+    dynamics::SceneSpec s = empty_scene();
+    s.shapes.push_back(ellipsoid(Vec3(radius, radius, radius)));
+    s.walls.push_back({"floor", dynamics::PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
+    s.particles.push_back(body_at(0, 0, Vec3(0.02, 0, radius + 1e-3), Vec3::Zero()));
+    dynamics::System sys(s);
+    HeatSpec h = heat_of(s, heat::HeatModel::lumped);
+    h.wall_temperature = {500.0};
+    h.materials[0].initial_temperature = 0.0; // the added body starts at 0 K
+    ThermalSystem heat(h, sys);
+    for (int k = 0; k < 10; ++k) {
+        sys.step();
+        heat.after_step(sys);
+    }
+    const std::int64_t added = sys.particles().id[sys.add_body(
+        0, 0, Vec3(0, 0, radius + 5e-6), Vec3(0, 0, -0.8), Vec3::Zero(), Quat::Identity())];
+    double r_eff = 0.0;
+    for (int k = 10; k < h.step_multiple; ++k) {
+        sys.step();
+        for (const dynamics::ContactOnset& e : sys.contact_onsets()) {
+            EXPECT_EQ(e.id_i, added);
+            r_eff = e.r_eff;
+        }
+        heat.after_step(sys);
+    }
+    ASSERT_EQ(heat.collisions(), 1);
+    // The store may reorder particles: find the added body by its id.
+    const auto& ids = sys.particles().id;
+    const auto k = static_cast<std::size_t>(std::find(ids.begin(), ids.end(), added) - ids.begin());
+    const double m = sys.particles().mass[k];
+    const double tc = heat::hertz_impact_duration(m, e_star, r_eff, 0.8);
+    const double rc = heat::hertz_impact_radius(m, e_star, r_eff, 0.8);
+    const double e = heat::impact_heat(side, side, tc, rc, 0.0, 500.0);
+    EXPECT_NEAR(m * specific_heat * heat.mean_temperature(sys, k), e, formula_tolerance * e);
 }
 
 /// A closed box of 27 bodies (dumbbell clumps, ellipsoids, cubes in turn) with random
