@@ -380,5 +380,44 @@ TEST(BodyGaps, ClosedRadiatingBedOfBodiesConservesHeat) {
     EXPECT_GT(heat.thermal_energy() / heat.heat_capacity(), 300.0 + 1.0); // heat moved
 }
 
+TEST(BodyGaps, ABlackCubeAmongNeighboursAtTheAmbientLosesWhatItLosesAlone) {
+    // The ambient share rule for bodies: what a cube sees of its six neighbours (area-equivalent
+    // spheres, view area (A F)) it does not see of the ambient, so with the neighbours at T_a it
+    // sits in an isothermal enclosure and loses sigma A (T^4 - T_a^4), as alone.
+    const double a = 1.5e-3;
+    const auto loss = [&](bool neighbours) {
+        dynamics::SceneSpec s = scene({test::cube_template(a)});
+        s.particles.push_back(at(0, 0, Vec3::Zero()));
+        if (neighbours) {
+            for (int k = 0; k < 6; ++k) {
+                const Vec3 n = (k % 2 == 0 ? 1.0 : -1.0) * Vec3::Unit(k / 2);
+                s.particles.push_back(at(0, 0, (2.5 * a) * n)); // gap 0.5 a
+            }
+        }
+        dynamics::System sys(s);
+        HeatSpec h = heat_of(s, heat::HeatModel::lumped);
+        h.step_multiple = 100; // one thermal step of 1 ms
+        h.radiation_temperature = 300.0;
+        h.materials[0].emissivity = 1.0;
+        h.particle_temperature.assign(s.particles.size(), 300.0);
+        h.particle_temperature[0] = 600.0;
+        ThermalSystem heat(h, sys);
+        heat.thermal_step(sys);
+        if (neighbours) {
+            // The centre with each neighbour, and the 12 neighbour pairs at right angles (gap
+            // 2.5 sqrt 2 a - cube: within the cut-off); opposite neighbours are beyond it.
+            EXPECT_EQ(summary_count(heat, "radiation_pairs"), 18);
+        }
+        return capacity(s, 0) * (600.0 - heat.mean_temperature(sys, 0));
+    };
+    const double alone = loss(false);
+    const double among = loss(true);
+    std::printf("cube loss in 1 ms: alone %.9g J, among neighbours at T_a %.9g J\n", alone, among);
+    // Equal at the start of the step; the ambient part is implicit (linearised) and the neighbour
+    // part lagged over it: ~ dt 4 sigma A T^3 / C ~ 1e-5 of the loss (as for spheres).
+    EXPECT_NEAR(among, alone, 1e-4 * alone);
+    EXPECT_GT(alone, 0.0);
+}
+
 } // namespace
 } // namespace kiln::thermal
