@@ -221,6 +221,34 @@ TEST(BodyGaps, GasGapOfABodyPairMatchesTheLibraryForItsEquivalentRadius) {
     }
 }
 
+TEST(BodyGaps, OneSphereClumpsExchangeAsTheirSpheres) {
+    // A clump of one sphere is that sphere: its gas gap and its radiation through the body path
+    // (GJK, member radius; area-equivalent radius = R) must give the sphere path's numbers. Gaps
+    // from GJK (points: exact) and the same formulas: rounding only over 50 lumped steps.
+    const double r = 1.5e-3;
+    const double gap = 0.3 * r;
+    const auto run = [&](bool clumps) {
+        dynamics::SceneSpec s = scene(
+            {geometry::make_template("ball", geometry::make_clump({{Vec3::Zero(), r}}, "test"))});
+        const int shape = clumps ? 0 : -1;
+        s.particles = {at(shape, r, Vec3::Zero()), at(shape, r, Vec3(2 * r + gap, 0, 0))};
+        dynamics::System sys(s);
+        HeatSpec h = heat_of(s, heat::HeatModel::lumped);
+        h.gas.conductivity = k_gas;
+        h.materials[0].emissivity = 0.9;
+        h.particle_temperature = {900.0, 300.0};
+        ThermalSystem heat(h, sys);
+        for (int k = 0; k < 50; ++k) {
+            heat.thermal_step(sys);
+        }
+        return heat.mean_temperature(sys, 1);
+    };
+    const double spheres = run(false);
+    const double clumps = run(true);
+    EXPECT_GT(spheres, 300.0 + 1.0); // heat moved
+    EXPECT_NEAR(clumps, spheres, 1e-12 * spheres);
+}
+
 /// 27 particles in a closed box without gravity, random velocities: dumbbells, ellipsoids, cubes
 /// and spheres in turn; material 0 lumped at 600 K, material 1 resolved at 300 K.
 dynamics::SceneSpec mixed_box(double spacing) {
