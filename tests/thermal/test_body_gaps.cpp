@@ -249,6 +249,60 @@ TEST(BodyGaps, OneSphereClumpsExchangeAsTheirSpheres) {
     EXPECT_NEAR(clumps, spheres, 1e-12 * spheres);
 }
 
+TEST(BodyGaps, ResolvedBodiesTakeTheGasHeatOnTheCellsFacingTheGap) {
+    // A hot lumped cube and a cold resolved ellipsoid turned 90 deg about z, 0.2 mm apart along
+    // x: the heat enters the ellipsoid's cells nearest the gap (in its body frame, the direction
+    // q^-1 (-x)), so after 0.05 s (diffusion length sqrt(alpha t) ~ 0.15 mm) those are the
+    // warmest and the far side has hardly warmed.
+    const geometry::ShapeTemplate c = test::cube_template(1.5e-3);
+    const geometry::ShapeTemplate e = ellipsoid(Vec3(2.5e-3, 1.5e-3, 1.2e-3));
+    const Quat q(Eigen::AngleAxisd(std::numbers::pi / 2, Vec3::UnitZ()));
+    dynamics::SceneSpec s = scene({c, e});
+    s.materials.push_back({"b", 1e8, 0.3, density, 0.9, 0.3, 0.0});
+    // q turns body x into world y and body y into world -x: the gap faces the ellipsoid's body +y
+    // side, 1.5 mm from its centre (cube face at x = 1.5 mm, ellipsoid surface at 1.7 mm).
+    dynamics::ParticleSpec hot = at(0, 0, Vec3::Zero());
+    dynamics::ParticleSpec cold = at(1, 0, Vec3(1.5e-3 + 1.5e-3 + 0.2e-3, 0, 0), q);
+    cold.material = 1;
+    s.particles = {hot, cold};
+    dynamics::System sys(s);
+    HeatSpec h = heat_of(s, heat::HeatModel::lumped);
+    h.materials[1].model = heat::HeatModel::resolved;
+    h.materials[1].cells_across = 8;
+    h.gas.conductivity = k_gas;
+    h.particle_temperature = {600.0, 300.0};
+    ThermalSystem heat(h, sys);
+    const double e0 = heat.thermal_energy();
+    for (int k = 0; k < 5; ++k) {
+        heat.thermal_step(sys);
+    }
+    const std::vector<FieldView> views = heat.fields(sys, {});
+    ASSERT_EQ(views.size(), 1U);
+    const FieldView& v = views[0];
+    // The body-frame direction towards the hot cube: q^-1 (-x).
+    const Vec3 towards = q.conjugate() * Vec3(-1, 0, 0);
+    double near = 0.0;
+    double far = 0.0;
+    double hottest_projection = 0.0;
+    double hottest = 0.0;
+    for (std::size_t k = 0; k < v.field.size(); ++k) {
+        const double along = v.grid->node[k].dot(towards);
+        if (v.field[k] > hottest) {
+            hottest = v.field[k];
+            hottest_projection = along;
+        }
+        if (along > 1.0e-3) {
+            near = std::max(near, v.field[k] - 300.0);
+        } else if (along < -1.0e-3) {
+            far = std::max(far, v.field[k] - 300.0);
+        }
+    }
+    std::printf("resolved gap: near side +%.4g K, far side +%.4g K\n", near, far);
+    EXPECT_GT(hottest_projection, 1.0e-3);             // the warmest cell faces the gap
+    EXPECT_GT(near, 100.0 * far);                      // the far side has hardly warmed yet
+    EXPECT_NEAR(heat.thermal_energy(), e0, 1e-9 * e0); // the solves' residual 1e-12
+}
+
 /// 27 particles in a closed box without gravity, random velocities: dumbbells, ellipsoids, cubes
 /// and spheres in turn; material 0 lumped at 600 K, material 1 resolved at 300 K.
 dynamics::SceneSpec mixed_box(double spacing) {
