@@ -629,15 +629,13 @@ void System::half_kick(std::size_t p0, std::size_t p1) {
 
 void System::note_body_onset(const BodyContactKey& key, const Vec3& n, const Vec3& point,
                              const Vec3& v_rel, double m_eff, double r_eff) {
-    const auto n_walls = static_cast<std::int64_t>(spec_.walls.size());
     ContactOnset e;
     e.id_i = key.a;
     if (key.b >= 0) {
         e.id_j = key.b;
-    } else if (-1 - key.b < n_walls) {
-        e.wall = static_cast<std::int32_t>(-1 - key.b);
     } else {
-        return; // mesh walls: not recorded (the heat coupling refuses hot mesh walls with them)
+        // heat: analytic wall w, or mesh wall m as walls.size() + m (the key's wall order).
+        e.wall = static_cast<std::int32_t>(-1 - key.b);
     }
     e.step = step_ + 1; // the step counter advances after the forces
     // v_rel is v^(n+1/2) of the contact point, before the contact force acted (as for spheres).
@@ -665,8 +663,8 @@ void System::compute_forces(bool kick_requested) {
     // Contact onsets only at a step (a refresh has no start-of-step positions); bodies' element
     // contacts are recorded in body_forces().
     const bool record = spec_.record_contact_onsets && kick_requested;
-    onsets_.clear();
     if (record) {
+        onsets_.clear(); // heat: a refresh keeps the last step's onsets for after_step
         pair_onsets_.resize(pair_units);
         wall_onsets_.resize(particle_units);
         for (auto& v : pair_onsets_) {

@@ -59,11 +59,13 @@ struct ContactRecord {
 struct ContactOnset {
     std::int64_t id_i = 0;  ///< particle id of i
     std::int64_t id_j = -1; ///< particle id of the partner; -1 for a wall
-    std::int32_t wall = -1; ///< analytic wall index (SceneSpec::walls) or -1 for a particle pair
-    std::int64_t step = 0;  ///< step count at the end of the step that found it (-)
-    double speed = 0;       ///< normal approach speed before the impact (m/s), >= 0
-    double r_eff = 0;       ///< effective radius of curvature R* (m)
-    double m_eff = 0;       ///< effective mass m* (kg); the particle's mass against a wall
+    /// Wall index or -1 for a particle pair: analytic walls (SceneSpec::walls) first, then mesh
+    /// walls as walls.size() + mesh wall index (recorded by body_forces, spheres included).
+    std::int32_t wall = -1;
+    std::int64_t step = 0;        ///< step count at the end of the step that found it (-)
+    double speed = 0;             ///< normal approach speed before the impact (m/s), >= 0
+    double r_eff = 0;             ///< effective radius of curvature R* (m)
+    double m_eff = 0;             ///< effective mass m* (kg); the particle's mass against a wall
     double normal[3] = {0, 0, 1}; ///< unit normal from i towards its partner (world)
     /// Contact point (m, world) of an element contact of a body; 0 for sphere-kernel onsets
     /// (a sphere's contact point is its centre + R normal).
@@ -136,9 +138,9 @@ class System {
 
     /// Contacts that started during the last step() (sphere-sphere in neighbour-list chunk order,
     /// then sphere-wall in particle-unit and wall order, then element contacts of bodies with
-    /// each other and analytic walls in body_forces() order; mesh walls record none); empty
-    /// unless SceneSpec::record_contact_onsets is set. Overwritten by the next step: a consumer
-    /// takes them after every step.
+    /// each other, analytic and mesh walls in body_forces() order); empty unless
+    /// SceneSpec::record_contact_onsets is set. Overwritten by the next step (a refresh() keeps
+    /// them; contacts it finds are no onsets): a consumer takes them after every step.
     [[nodiscard]] const std::vector<ContactOnset>& contact_onsets() const { return onsets_; }
 
     /// Copies out the full evolving state (checkpoint).
@@ -268,9 +270,9 @@ class System {
     std::vector<ContactOnset> onsets_;
     // body_forces() of this step appends element-contact onsets (heat: collision conduction).
     bool record_body_onsets_ = false;
-    /// Appends the onset of the new element contact `key` (pair or analytic wall; mesh walls are
-    /// skipped) with normal `n` (b to a, world), contact point `point` (m, world), relative
-    /// velocity of the contact point `v_rel` (a minus b, m/s), m* (kg) and R* (m) to onsets_.
+    /// Appends the onset of the new element contact `key` (pair, analytic or mesh wall) with normal
+    /// `n` (b to a, world), contact point `point` (m, world), relative velocity of the contact
+    /// point `v_rel` (a minus b, m/s), m* (kg) and R* (m) to onsets_.
     void note_body_onset(const BodyContactKey& key, const Vec3& n, const Vec3& point,
                          const Vec3& v_rel, double m_eff, double r_eff);
     /// True when contacts go through body_forces (bodies or mesh walls present).

@@ -57,9 +57,8 @@ struct HeatSpec {
     /// Gas in the gaps between spheres (Cheng et al. 1999); conductivity 0 = none.
     heat::GasGap gas;
     /// Collision conduction (Sun & Chen 1988 with Zhou et al.'s c'): every contact onset of two
-    /// particles (spheres or bodies) or of a particle and an analytic wall at a temperature
-    /// exchanges the impact heat once. Needs SceneSpec::record_contact_onsets; not yet for mesh
-    /// walls at a temperature (refused).
+    /// particles (spheres or bodies) or of a particle and a wall (analytic or mesh) at a
+    /// temperature exchanges the impact heat once. Needs SceneSpec::record_contact_onsets.
     bool collision_conduction = false;
     /// Temperature of the black enclosure every heated surface with an emissivity radiates to:
     /// q = eps sigma (T_s^4 - T^4) per surface cell (resolved) or particle (lumped), any shape

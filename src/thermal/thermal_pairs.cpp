@@ -1,6 +1,6 @@
 // ThermalSystem: exchanges between neighbours that need not touch or that only touched briefly:
-// gas-gap conduction and radiation between nearby spheres, and the heat of each impact
-// (collision conduction).
+// gas-gap conduction and radiation between nearby particles (pairs with a body:
+// thermal_body_pairs.cpp), and the heat of each impact (collision conduction).
 
 #include "thermal/thermal_system_detail.hpp"
 
@@ -25,21 +25,36 @@ void ThermalSystem::add_gas_gaps(const dynamics::System& sys, std::vector<double
     if (!(spec_.gas.conductivity > 0.0)) {
         return;
     }
-    // Heated spheres only (radius 0 hides the others from the pair search). The search is a cell
-    // list of its own at each thermal step, so the cut-off does not depend on the neighbour list's
-    // skin (by default 0.2 R, well below the seed's gap cut-off of R).
+    // Heated particles (radius 0 hides the others from the pair search): spheres by their radius,
+    // bodies by their bounding radius, which finds every pair within reach of the equivalent
+    // radii body_gas_gap uses (those are never larger). The search is a cell list of its own at
+    // each thermal step, so the cut-off does not depend on the neighbour list's skin (by default
+    // 0.2 R, well below the seed's gap cut-off of R).
     const ParticleStore& p = sys.particles();
     std::vector<double> r(p.size(), 0.0);
     for (std::size_t i = 0; i < p.size(); ++i) {
-        if (p.shape[i] < 0 && by_id_[static_cast<std::size_t>(p.id[i])].slot >= 0) {
+        if (by_id_[static_cast<std::size_t>(p.id[i])].slot >= 0) {
             r[i] = p.radius[i];
         }
     }
     long pairs = 0;
+    std::vector<ContactData> element_data; // the exchanges of one pair with a body
     for (const heat::NearPair& np : heat::near_sphere_pairs(p.x, r, spec_.gas.cutoff)) {
         ContactData d;
         d.a = by_id_[static_cast<std::size_t>(p.id[np.i])];
         d.b = by_id_[static_cast<std::size_t>(p.id[np.j])];
+        if (p.shape[np.i] >= 0 || p.shape[np.j] >= 0) {
+            body_gas_gaps(sys, np.i, np.j, d, element_data);
+            for (ContactData& e : element_data) {
+                g_sum[np.i] += e.conductance;
+                g_sum[np.j] += e.conductance;
+                worst = std::max(worst, e.conductance / patch_capacity(e.a, e.patches_a) +
+                                            e.conductance / patch_capacity(e.b, e.patches_b));
+                data_.push_back(std::move(e));
+                ++pairs;
+            }
+            continue;
+        }
         const Vec3 between = p.x[np.j] - p.x[np.i];
         const double s = between.norm();
         const double k_a = spec_.materials[static_cast<std::size_t>(d.a.material)].conductivity;
@@ -79,13 +94,15 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
     // Ambient view shares: the whole surface unless neighbours take part of it (below).
     lumped_view_.assign(lumped_.size(), 1.0);
     pool_view_.assign(static_cast<std::size_t>(pool_.size()), 1.0);
-    // Heated spheres with an emissivity (others radius 0: left out of the search).
+    // Heated particles with an emissivity (others radius 0: left out of the search); bodies by
+    // the larger of their bounding radius and area-equivalent radius (body_radiation's radius).
     std::vector<double> r(p.size(), 0.0);
     bool any = false;
     for (std::size_t i = 0; i < p.size(); ++i) {
         const Record& rec = by_id_[static_cast<std::size_t>(p.id[i])];
-        if (p.shape[i] < 0 && rec.slot >= 0 && emissivity(rec) > 0.0) {
-            r[i] = p.radius[i];
+        if (rec.slot >= 0 && emissivity(rec) > 0.0) {
+            r[i] = p.shape[i] < 0 ? p.radius[i]
+                                  : std::max(p.radius[i], equivalent_radius(sys, i, true));
             any = true;
         }
     }
@@ -102,6 +119,27 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
         d.radiative = true;
         d.a = by_id_[static_cast<std::size_t>(p.id[np.i])];
         d.b = by_id_[static_cast<std::size_t>(p.id[np.j])];
+        if (p.shape[np.i] >= 0 || p.shape[np.j] >= 0) {
+            double af = 0.0;
+            double area_i = 0.0;
+            double area_j = 0.0;
+            if (!body_radiation(sys, np.i, np.j, emissivity(d.a), emissivity(d.b), d, af, area_i,
+                                area_j)) {
+                continue;
+            }
+            ambient_view(d.a) -= af / area_i;
+            ambient_view(d.b) -= af / area_j;
+            const double g =
+                heat::radiative_conductance_bound(d.conductance, contact_temperature(d.a, d, false),
+                                                  contact_temperature(d.b, d, true));
+            g_sum[np.i] += g;
+            g_sum[np.j] += g;
+            worst = std::max(worst, g / patch_capacity(d.a, d.patches_a) +
+                                        g / patch_capacity(d.b, d.patches_b));
+            data_.push_back(std::move(d));
+            ++pairs;
+            continue;
+        }
         const Vec3 between = p.x[np.j] - p.x[np.i];
         const double s = between.norm();
         // Overlapping (touching) spheres radiate as if just touching.
@@ -167,12 +205,18 @@ void ThermalSystem::add_collisions(const dynamics::System& sys, std::vector<doub
         }
         int mat_j = 0;
         if (e.wall >= 0) {
+            // Analytic walls first, then the mesh walls (the onset's wall order).
             d.wall = true;
-            d.wall_temperature = spec_.wall_temperature[static_cast<std::size_t>(e.wall)];
+            const auto w = static_cast<std::size_t>(e.wall);
+            const std::size_t n_walls = spec_.wall_temperature.size();
+            const bool mesh = w >= n_walls;
+            d.wall_temperature =
+                mesh ? spec_.mesh_wall_temperature[w - n_walls] : spec_.wall_temperature[w];
             if (std::isnan(d.wall_temperature)) {
                 continue; // adiabatic wall
             }
-            mat_j = sys.spec().walls[static_cast<std::size_t>(e.wall)].material;
+            mat_j =
+                mesh ? sys.spec().mesh_walls[w - n_walls].material : sys.spec().walls[w].material;
         } else {
             d.b = record_of(e.id_j);
             if (d.b.slot < 0) {

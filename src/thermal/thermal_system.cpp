@@ -129,56 +129,14 @@ ThermalSystem::ThermalSystem(const HeatSpec& spec, const dynamics::System& sys) 
                                          describe_kind(sys, material, shape, where)));
         }
     }
-    // Gas-gap conduction is a sphere-pair model (Cheng et al. 1999): refuse heated bodies. The
-    // radiation view factor is a sphere estimate: refuse bodies of a material with an emissivity.
-    // With radiation to the ambient they radiate to it only (a warning says so).
-    bool warned_bodies = false;
-    for (const auto& [material, shape, where] : kinds) {
-        const MaterialHeat& mh = spec_.materials[static_cast<std::size_t>(material)];
-        if (shape >= 0 && mh.enabled && mh.emissivity > 0.0) {
-            if (std::isnan(spec_.radiation_temperature)) {
-                throw InputError(fmt::format(
-                    "heat: an emissivity with non-spherical particles ({}): radiation between "
-                    "non-spherical neighbours: not yet (the view factor is a sphere estimate; set "
-                    "emissivity = 0, use spheres, or set radiation_temperature for radiation to "
-                    "the ambient only)",
-                    describe_kind(sys, material, shape, where)));
-            }
-            if (!warned_bodies) {
-                warned_bodies = true;
-                warnings_.push_back(fmt::format(
-                    "heat: non-spherical particles ({}) radiate to the ambient only: radiation "
-                    "between neighbours is for spheres",
-                    describe_kind(sys, material, shape, "")));
-            }
-        }
-    }
-    if (spec_.gas.conductivity > 0.0) {
-        for (const auto& [material, shape, where] : kinds) {
-            if (shape >= 0 && spec_.materials[static_cast<std::size_t>(material)].enabled) {
-                throw InputError(fmt::format(
-                    "heat: gas_conductivity > 0 with heated non-spherical particles ({}): gas-gap "
-                    "conduction for non-spherical shapes: not yet (the Cheng et al. lens model is "
-                    "for spheres; set gas_conductivity = 0 or use spheres)",
-                    describe_kind(sys, material, shape, where)));
-            }
-        }
-    }
+    // Gas-gap conduction and neighbour radiation take every shape: bodies use the sphere
+    // formulas with an equivalent radius (thermal_body_pairs.cpp, docs/theory/heat.md).
     if (spec_.collision_conduction) {
-        // Impacts come from the System's onset records (sphere kernel and body element
-        // contacts); mesh walls record none yet.
+        // Impacts come from the System's onset records (sphere kernel, body element contacts and
+        // every contact with a mesh wall).
         if (!sys.spec().record_contact_onsets) {
             throw InputError("heat: collision_conduction needs the System to record contact "
                              "onsets (SceneSpec::record_contact_onsets = true)");
-        }
-        for (std::size_t w = 0; w < spec_.mesh_wall_temperature.size(); ++w) {
-            if (!std::isnan(spec_.mesh_wall_temperature[w])) {
-                throw InputError(fmt::format(
-                    "heat: collision_conduction with mesh wall \"{}\" at a temperature: not yet "
-                    "for mesh walls (their impacts are not recorded; set collision_conduction = "
-                    "false or leave the mesh wall adiabatic)",
-                    sys.spec().mesh_walls[w].name));
-            }
         }
     }
     sync(sys);

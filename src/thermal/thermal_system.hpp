@@ -2,14 +2,14 @@
 // Heat in the run loop: the temperatures of every particle of a dynamics::System, advanced every
 // `step_multiple` mechanical steps by the heat library (lumped or resolved per material), coupled
 // through lagged contact conduction (particle-particle and particle-wall), gas-gap conduction and
-// radiation between neighbouring spheres (pairs from a cell search of their own at each thermal
-// step), convection to a prescribed ambient and a prescribed surface flux. Theory:
-// docs/theory/heat.md, "Coupling", "Gas-gap conduction", "Radiation".
+// radiation between neighbouring particles (pairs from a cell search of their own at each thermal
+// step; gaps of bodies from their shapes, body_gap.hpp), convection to a prescribed ambient and a
+// prescribed surface flux. Theory: docs/theory/heat.md, "Coupling", "Gas-gap conduction",
+// "Gaps between bodies", "Radiation".
 //
 // Shapes: heat templates are keyed by (material, sphere radius) for spheres and by (material, shape
-// template) for bodies (clumps, superquadrics). Lumped bodies take volume and surface area from
-// their template; resolved bodies get the Cartesian cut-cell grid of their shape (superquadrics;
-// clumps and polyhedra: lumped only, resolved is an InputError).
+// template) for bodies (clumps, superquadrics, polyhedra). Lumped bodies take volume and surface
+// area from their template; resolved bodies get the Cartesian cut-cell grid of their shape.
 //
 // Frames: contacts come from System::collect_contacts in the world frame. For a body they are
 // rotated into its body frame with the inverse of its orientation q (body -> world) before they
@@ -177,13 +177,33 @@ class ThermalSystem {
     [[nodiscard]] double patch_capacity(const Record& r, const std::vector<int>& patches) const;
     [[nodiscard]] double contact_temperature(const Record& r, const ContactData& c,
                                              bool side_j) const;
-    /// Appends the gas-gap (particle-fluid-particle) exchange of every heated sphere pair within
+    /// Appends the gas-gap (particle-fluid-particle) exchange of every heated particle pair within
     /// the cut-off to data_, adding its conductances to `g_sum` (W/K, by particle index) and its
     /// pair rate to `worst` (1/s) for the lag limit. Nothing without gas.
     void add_gas_gaps(const dynamics::System& sys, std::vector<double>& g_sum, double& worst);
-    /// Appends the radiative exchange of every pair of heated spheres with emissivities > 0 within
-    /// radiation_cutoff to data_ (coefficient K, W/K^4), with the linearised conductance
-    /// 4 K T^3 in `g_sum` and `worst` for the lag limit. Nothing without emissivities.
+    /// Gas-gap exchanges of particle indices i and j, at least one a body (thermal_body_pairs.cpp):
+    /// one copy of `base` (records set) with conductance and patches per element pair within the
+    /// cut-off, into `out` (cleared first).
+    void body_gas_gaps(const dynamics::System& sys, std::size_t i, std::size_t j,
+                       const ContactData& base, std::vector<ContactData>& out) const;
+    /// Radiative exchange of particle indices i and j with emissivities e_i, e_j, at least one a
+    /// body: coefficient and patches into `d`, the pair's view area (m^2) and each side's
+    /// radiating area (m^2); false beyond radiation_cutoff.
+    bool body_radiation(const dynamics::System& sys, std::size_t i, std::size_t j, double e_i,
+                        double e_j, ContactData& d, double& view_area, double& area_i,
+                        double& area_j) const;
+    /// Patches of resolved particle index k (record r) facing the world direction `n` within
+    /// `radius` (m) of the axis through the world point `point` (m), widened on Cartesian grids.
+    [[nodiscard]] std::vector<int> gap_patches(const dynamics::System& sys, const Record& r,
+                                               std::size_t k, const Vec3& point, const Vec3& n,
+                                               double radius) const;
+    /// Radius of particle index k (m): a sphere's own; a body's volume- (by_area false) or
+    /// area-equivalent (true) sphere radius.
+    [[nodiscard]] double equivalent_radius(const dynamics::System& sys, std::size_t k,
+                                           bool by_area) const;
+    /// Appends the radiative exchange of every pair of heated particles with emissivities > 0
+    /// within radiation_cutoff to data_ (coefficient K, W/K^4), with the linearised conductance 4 K
+    /// T^3 in `g_sum` and `worst` for the lag limit. Nothing without emissivities.
     void add_radiation(const dynamics::System& sys, std::vector<double>& g_sum, double& worst);
     /// Appends one exchange per pending contact onset (collision conduction) to data_: the
     /// impact heat E of collision_conduction.hpp as the conductance E / (dt_thermal (T_j - T_i))

@@ -8,15 +8,18 @@
 #include "common/cube_template.hpp"
 #include "dynamics/system.hpp"
 #include "geometry/clump.hpp"
+#include "geometry/mesh_wall.hpp"
 #include "geometry/polyhedron.hpp"
 #include "geometry/shape.hpp"
 #include "heat/collision_conduction.hpp"
 #include "thermal/thermal_system.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <gtest/gtest.h>
+#include <memory>
 #include <random>
 
 namespace kiln::thermal {
@@ -136,6 +139,82 @@ TEST(CollisionBodies, RoundSuperquadricOnAHotWallTakesTheWallImpactHeat) {
     const double e = heat::impact_heat(side, side, tc, rc, 0.0, 500.0);
     EXPECT_NEAR(heat.external_heat(), e, formula_tolerance * e);
     EXPECT_NEAR(m * specific_heat * heat.mean_temperature(sys, 0), e, formula_tolerance * e);
+}
+
+TEST(CollisionBodies, RoundSuperquadricOnAHotMeshFloorTakesTheWallImpactHeat) {
+    // As on the plane: a mesh wall's contact is an element contact of body_forces, so the onset
+    // is recorded there, with the mesh wall's index after the analytic walls (none here: 0).
+    const double l = 0.05;
+    dynamics::SceneSpec s = empty_scene();
+    s.shapes.push_back(ellipsoid(Vec3(radius, radius, radius)));
+    s.mesh_walls.push_back(
+        {"floor",
+         std::make_shared<const geometry::MeshWall>(
+             std::vector<Vec3>{Vec3(-l, -l, -l), Vec3(l, -l, -l), Vec3(l, l, -l), Vec3(-l, l, -l)},
+             std::vector<std::array<int, 3>>{{0, 1, 2}, {0, 2, 3}}, "test floor"),
+         0});
+    s.particles.push_back(body_at(0, 0, Vec3(0.01, -0.02, -l + radius + 0.5e-3), Vec3(0, 0, -0.8)));
+    dynamics::System sys(s);
+    HeatSpec h = heat_of(s, heat::HeatModel::lumped);
+    h.mesh_wall_temperature = {500.0};
+    h.particle_temperature = {0.0};
+    ThermalSystem heat(h, sys);
+    double r_eff = 0.0;
+    for (int k = 0; k < h.step_multiple; ++k) {
+        sys.step();
+        for (const dynamics::ContactOnset& e : sys.contact_onsets()) {
+            EXPECT_EQ(e.wall, 0);
+            EXPECT_NEAR(e.speed, 0.8, 1e-12);
+            r_eff = e.r_eff;
+        }
+        heat.after_step(sys);
+    }
+    ASSERT_EQ(heat.collisions(), 1);
+    EXPECT_NEAR(r_eff, radius, 1e-6 * radius); // Newton's contact point: 1e-6
+    const double m = sys.particles().mass[0];
+    const double tc = heat::hertz_impact_duration(m, e_star, r_eff, 0.8);
+    const double rc = heat::hertz_impact_radius(m, e_star, r_eff, 0.8);
+    const double e = heat::impact_heat(side, side, tc, rc, 0.0, 500.0);
+    EXPECT_NEAR(heat.external_heat(), e, formula_tolerance * e);
+    EXPECT_NEAR(m * specific_heat * heat.mean_temperature(sys, 0), e, formula_tolerance * e);
+}
+
+TEST(CollisionBodies, ABodyAddedDuringTheRunRecordsItsFirstImpact) {
+    // The round superquadric above, added after 10 steps 5 um above the hot floor at 0.8 m/s:
+    // it touches in its first step (dt 1e-5 s), which records the impact as for a placed body.
+    dynamics::SceneSpec s = empty_scene();
+    s.shapes.push_back(ellipsoid(Vec3(radius, radius, radius)));
+    s.walls.push_back({"floor", dynamics::PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
+    s.particles.push_back(body_at(0, 0, Vec3(0.02, 0, radius + 1e-3), Vec3::Zero()));
+    dynamics::System sys(s);
+    HeatSpec h = heat_of(s, heat::HeatModel::lumped);
+    h.wall_temperature = {500.0};
+    h.materials[0].initial_temperature = 0.0; // the added body starts at 0 K
+    ThermalSystem heat(h, sys);
+    for (int k = 0; k < 10; ++k) {
+        sys.step();
+        heat.after_step(sys);
+    }
+    const std::int64_t added = sys.particles().id[sys.add_body(
+        0, 0, Vec3(0, 0, radius + 5e-6), Vec3(0, 0, -0.8), Vec3::Zero(), Quat::Identity())];
+    double r_eff = 0.0;
+    for (int k = 10; k < h.step_multiple; ++k) {
+        sys.step();
+        for (const dynamics::ContactOnset& e : sys.contact_onsets()) {
+            EXPECT_EQ(e.id_i, added);
+            r_eff = e.r_eff;
+        }
+        heat.after_step(sys);
+    }
+    ASSERT_EQ(heat.collisions(), 1);
+    // The store may reorder particles: find the added body by its id.
+    const auto& ids = sys.particles().id;
+    const auto k = static_cast<std::size_t>(std::find(ids.begin(), ids.end(), added) - ids.begin());
+    const double m = sys.particles().mass[k];
+    const double tc = heat::hertz_impact_duration(m, e_star, r_eff, 0.8);
+    const double rc = heat::hertz_impact_radius(m, e_star, r_eff, 0.8);
+    const double e = heat::impact_heat(side, side, tc, rc, 0.0, 500.0);
+    EXPECT_NEAR(m * specific_heat * heat.mean_temperature(sys, k), e, formula_tolerance * e);
 }
 
 /// A closed box of 27 bodies (dumbbell clumps, ellipsoids, cubes in turn) with random

@@ -10,6 +10,7 @@
 #include "heat/collision_conduction.hpp"
 #include "thermal/thermal_system.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -192,7 +193,7 @@ TEST(CollisionRun, FlagOffChangesNothingAndRecordingLeavesTheMechanicsAlone) {
     EXPECT_LT(hot2, hot0);
 }
 
-TEST(CollisionRun, HotMeshWallsAndAMissingRecorderAreRefused) {
+TEST(CollisionRun, AMissingRecorderIsRefused) {
     dynamics::SceneSpec s = empty_scene();
     s.particles.push_back({0, radius, Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
     s.record_contact_onsets = false;
@@ -203,23 +204,172 @@ TEST(CollisionRun, HotMeshWallsAndAMissingRecorderAreRefused) {
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("record_contact_onsets"), std::string::npos);
     }
-    s.record_contact_onsets = true;
-    // A hot mesh wall: its contacts record no onsets yet.
+}
+
+/// Index of the particle with id `id` (the store may reorder particles) (-).
+std::size_t index_of(const dynamics::System& sys, std::int64_t id) {
+    const auto& ids = sys.particles().id;
+    return static_cast<std::size_t>(std::find(ids.begin(), ids.end(), id) - ids.begin());
+}
+
+/// A square mesh floor z = -l of two triangles (shared diagonal through x = y), material 0.
+dynamics::MeshWallSpec mesh_floor(double l) {
+    return {
+        "floor",
+        std::make_shared<const geometry::MeshWall>(
+            std::vector<Vec3>{Vec3(-l, -l, -l), Vec3(l, -l, -l), Vec3(l, l, -l), Vec3(-l, l, -l)},
+            std::vector<std::array<int, 3>>{{0, 1, 2}, {0, 2, 3}}, "test floor"),
+        0};
+}
+
+TEST(CollisionRun, ImpactOnAHotMeshWallTakesTheWallImpactHeat) {
+    // As on the analytic wall: m* = m, R* = R, approach 0.8 m/s, once per impact. Two places:
+    // inside one triangle, and on the edge the two triangles share (one impact, not two).
+    for (const Vec3& at : {Vec3(0.01, -0.02, 0), Vec3(0.005, 0.005, 0)}) {
+        const double l = 0.05;
+        dynamics::SceneSpec s = empty_scene();
+        s.mesh_walls.push_back(mesh_floor(l));
+        s.particles.push_back(
+            {0, radius, at + Vec3(0, 0, -l + radius + 0.5e-3), Vec3(0, 0, -0.8), Vec3::Zero()});
+        dynamics::System sys(s);
+        HeatSpec h = heat_of(s, heat::HeatModel::lumped);
+        h.mesh_wall_temperature = {500.0};
+        h.particle_temperature = {0.0};
+        ThermalSystem heat(h, sys);
+        for (int k = 0; k < h.step_multiple; ++k) {
+            sys.step();
+            for (const dynamics::ContactOnset& e : sys.contact_onsets()) {
+                EXPECT_EQ(e.wall, 0); // no analytic walls: mesh wall 0 is wall 0
+                EXPECT_NEAR(e.speed, 0.8, 1e-12);
+            }
+            heat.after_step(sys);
+        }
+        ASSERT_EQ(heat.collisions(), 1) << "at " << at.transpose();
+        std::vector<dynamics::ContactRecord> touching;
+        sys.collect_contacts(touching);
+        ASSERT_TRUE(touching.empty());
+        const double m = sys.particles().mass[0];
+        const double tc = heat::hertz_impact_duration(m, e_star, radius, 0.8);
+        const double rc = heat::hertz_impact_radius(m, e_star, radius, 0.8);
+        const double e = heat::impact_heat(side, side, tc, rc, 0.0, 500.0);
+        EXPECT_NEAR(heat.external_heat(), e, formula_tolerance * e);
+        EXPECT_NEAR(m * specific_heat * heat.mean_temperature(sys, 0), e, formula_tolerance * e);
+    }
+}
+
+TEST(CollisionRun, AnalyticAndMeshWallsKeepTheirOwnTemperatures) {
+    // An analytic side wall x = -0.04 at 500 K and the mesh floor z = -l at 400 K: a sphere
+    // thrown at each takes its own wall's heat (the onset's wall index counts analytic walls
+    // first).
     const double l = 0.05;
-    s.mesh_walls.push_back(
-        {"floor",
-         std::make_shared<const geometry::MeshWall>(
-             std::vector<Vec3>{Vec3(-l, -l, -l), Vec3(l, -l, -l), Vec3(l, l, -l), Vec3(-l, l, -l)},
-             std::vector<std::array<int, 3>>{{0, 1, 2}, {0, 2, 3}}, "test floor"),
-         0});
-    dynamics::System with_mesh(s);
+    dynamics::SceneSpec s = empty_scene();
+    s.walls.push_back({"side", dynamics::PlaneWall{Vec3(-0.04, 0, 0), Vec3::UnitX()}, 0});
+    s.mesh_walls.push_back(mesh_floor(l));
+    s.particles.push_back(
+        {0, radius, Vec3(-0.04 + radius + 0.5e-3, 0, 0), Vec3(-0.8, 0, 0), Vec3::Zero()});
+    s.particles.push_back(
+        {0, radius, Vec3(0.01, 0.02, -l + radius + 0.5e-3), Vec3(0, 0, -0.8), Vec3::Zero()});
+    dynamics::System sys(s);
     HeatSpec h = heat_of(s, heat::HeatModel::lumped);
+    h.wall_temperature = {500.0};
     h.mesh_wall_temperature = {400.0};
-    try {
-        ThermalSystem heat(h, with_mesh);
-        FAIL() << "accepted collision conduction with a hot mesh wall";
-    } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("not yet for mesh walls"), std::string::npos);
+    h.particle_temperature = {0.0, 0.0};
+    ThermalSystem heat(h, sys);
+    for (int k = 0; k < h.step_multiple; ++k) {
+        sys.step();
+        heat.after_step(sys);
+    }
+    ASSERT_EQ(heat.collisions(), 2);
+    const double m = sys.particles().mass[0];
+    const double tc = heat::hertz_impact_duration(m, e_star, radius, 0.8);
+    const double rc = heat::hertz_impact_radius(m, e_star, radius, 0.8);
+    const double per_kelvin = heat::impact_heat(side, side, tc, rc, 0.0, 1.0); // J/K
+    const double c = m * specific_heat;
+    EXPECT_NEAR(c * heat.mean_temperature(sys, index_of(sys, 0)), 500.0 * per_kelvin,
+                formula_tolerance * 500.0 * per_kelvin);
+    EXPECT_NEAR(c * heat.mean_temperature(sys, index_of(sys, 1)), 400.0 * per_kelvin,
+                formula_tolerance * 400.0 * per_kelvin);
+}
+
+// ---- Particles added during the run and refresh() ------------------------------------------
+// Insertion blocks place their particles at start-up, before the constructor's refresh(); a run
+// may add particles later (System::add_particle / add_body, as validation 34's pour), and a caller
+// may move particles and call refresh(). A refresh evaluates forces without a step, so it has no
+// start-of-step positions: contacts it finds are not impacts (they exchange heat by the static
+// law from the next thermal step), and since it keeps the last step's onsets, a refresh between
+// step() and after_step() loses none.
+
+TEST(CollisionRun, ASphereAddedDuringTheRunRecordsItsFirstImpact) {
+    // A sphere added at rest's partner 5 um away, closing at 1 m/s (dt 1e-5 s: it touches in its
+    // first step, the step that also builds its neighbour list): one impact, the library's heat.
+    dynamics::SceneSpec s = empty_scene();
+    s.particles.push_back({0, radius, Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
+    dynamics::System sys(s);
+    HeatSpec h = heat_of(s, heat::HeatModel::lumped);
+    h.particle_temperature = {0.0}; // the added sphere gets its material's 300 K
+    ThermalSystem heat(h, sys);
+    for (int k = 0; k < 10; ++k) {
+        sys.step();
+        heat.after_step(sys);
+    }
+    sys.add_particle(0, radius, Vec3(2.0 * radius + 5e-6, 0, 0), Vec3(-1.0, 0, 0), Vec3::Zero());
+    long onsets = 0;
+    for (int k = 10; k < h.step_multiple; ++k) {
+        sys.step();
+        onsets += static_cast<long>(sys.contact_onsets().size());
+        heat.after_step(sys);
+    }
+    ASSERT_EQ(onsets, 1);
+    ASSERT_EQ(heat.collisions(), 1);
+    const double m = sys.particles().mass[0];
+    const double tc = heat::hertz_impact_duration(0.5 * m, e_star, 0.5 * radius, 1.0);
+    const double rc = heat::hertz_impact_radius(0.5 * m, e_star, 0.5 * radius, 1.0);
+    const double e = heat::impact_heat(side, side, tc, rc, 0.0, 300.0);
+    EXPECT_NEAR(m * specific_heat * heat.mean_temperature(sys, index_of(sys, 0)), e,
+                formula_tolerance * e);
+}
+
+TEST(CollisionRun, ContactsFoundByARefreshAreNoImpactsAndARefreshKeepsTheStepsOnsets) {
+    // (1) Two spheres placed overlapping and closing: the constructor's refresh finds the contact,
+    // the first step sees it touching at its start: no impact. (2) A step whose impact is followed
+    // by a refresh before after_step: the impact is still taken.
+    {
+        dynamics::SceneSpec s = empty_scene();
+        s.particles.push_back(
+            {0, radius, Vec3(-radius + 1e-6, 0, 0), Vec3(0.5, 0, 0), Vec3::Zero()});
+        s.particles.push_back(
+            {0, radius, Vec3(radius - 1e-6, 0, 0), Vec3(-0.5, 0, 0), Vec3::Zero()});
+        dynamics::System sys(s);
+        ThermalSystem heat(heat_of(s, heat::HeatModel::lumped), sys);
+        long onsets = 0;
+        for (int k = 0; k < 100; ++k) {
+            sys.step();
+            onsets += static_cast<long>(sys.contact_onsets().size());
+            heat.after_step(sys);
+        }
+        EXPECT_EQ(onsets, 0);
+        EXPECT_EQ(heat.collisions(), 0);
+    }
+    {
+        dynamics::SceneSpec s = empty_scene();
+        s.particles.push_back(
+            {0, radius, Vec3(-radius - 4e-6, 0, 0), Vec3(0.5, 0, 0), Vec3::Zero()});
+        s.particles.push_back(
+            {0, radius, Vec3(radius + 4e-6, 0, 0), Vec3(-0.5, 0, 0), Vec3::Zero()});
+        dynamics::System sys(s);
+        HeatSpec h = heat_of(s, heat::HeatModel::lumped);
+        h.particle_temperature = {0.0, 600.0};
+        ThermalSystem heat(h, sys);
+        sys.step(); // closes 10 um: touches
+        ASSERT_EQ(sys.contact_onsets().size(), 1U);
+        sys.refresh();
+        EXPECT_EQ(sys.contact_onsets().size(), 1U); // kept through the refresh
+        heat.after_step(sys);
+        for (int k = 1; k < h.step_multiple; ++k) {
+            sys.step();
+            heat.after_step(sys);
+        }
+        EXPECT_EQ(heat.collisions(), 1);
     }
 }
 

@@ -919,38 +919,5 @@ TEST(ThermalSystem, RadiatingResolvedPairConservesHeat) {
     EXPECT_LE(hi, 1200.0 + 1e-9);
 }
 
-TEST(ThermalSystem, GasGapRefusesHeatedNonSphericalParticles) {
-    const dynamics::SceneSpec s = squeezed_bodies(dumbbell(1.5e-3), 1.5e-3, Quat::Identity(), 2e-5);
-    dynamics::System sys(s);
-    HeatSpec h = heat_for(s, heat::HeatModel::lumped, 1.0);
-    h.gas.conductivity = 0.0263;
-    try {
-        ThermalSystem heat(h, sys);
-        FAIL() << "gas-gap conduction with bodies must be refused";
-    } catch (const InputError& e) {
-        const std::string what = e.what();
-        EXPECT_NE(what.find("gas-gap conduction for non-spherical shapes: not yet"),
-                  std::string::npos)
-            << what;
-        EXPECT_NE(what.find("dumbbell"), std::string::npos) << what;
-    }
-    h.gas.conductivity = 0.0;
-    h.materials[0].emissivity = 0.8;
-    try {
-        ThermalSystem heat(h, sys);
-        FAIL() << "radiation with bodies must be refused";
-    } catch (const InputError& e) {
-        const std::string what = e.what();
-        EXPECT_NE(what.find("radiation between non-spherical neighbours: not yet"),
-                  std::string::npos)
-            << what;
-    }
-    // With radiation to the ambient they are accepted (radiating to it only) with a warning.
-    h.radiation_temperature = 300.0;
-    ThermalSystem heat(h, sys);
-    ASSERT_FALSE(heat.warnings().empty());
-    EXPECT_NE(heat.warnings().front().find("radiate to the ambient only"), std::string::npos);
-}
-
 } // namespace
 } // namespace kiln::thermal

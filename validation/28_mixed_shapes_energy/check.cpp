@@ -4,7 +4,8 @@
 // their Cartesian cut-cell grids, turned with their orientation; and lumped). Reference: the
 // first law for an adiabatic system without sources, sum_i m_i c_i T_i = const, and the maximum
 // principle (no temperature leaves the initial range). Clump pairs conduct through every touching
-// member pair, so one body pair can carry several contacts.
+// member pair, so one body pair can carry several contacts. Gas in the gaps and radiation between
+// neighbours of every kind exchange too (bodies: gaps from their shapes, equivalent radii).
 
 #include "common/closed_heat_run.hpp"
 #include "dynamics/system.hpp"
@@ -13,9 +14,17 @@
 
 #include <cmath>
 #include <gtest/gtest.h>
+#include <string>
 
 namespace kiln::validation {
 namespace {
+
+/// Value of a counter `"key": N` in the heat summary (-); -1 when absent.
+long summary_count(const thermal::ThermalSystem& heat, const std::string& key) {
+    const std::string j = heat.summary_json();
+    const std::size_t at = j.find("\"" + key + "\": ");
+    return at == std::string::npos ? -1 : std::stol(j.substr(at + key.size() + 4));
+}
 
 /// Relative drift of sum C T: CG stops at a relative residual of 1e-12 of ||b|| ~ C T / dt per
 /// resolved solve; over ~1e5 solves the drift stays well below 1e-9 (as validation 26).
@@ -50,6 +59,10 @@ TEST(Validation28, MixedShapesInAnInsulatedBoxConserveHeat) {
     record("thermal steps", static_cast<double>(c.thermal_steps), 0, 0, "-");
     record("conducting contacts (sum over steps)", static_cast<double>(c.contacts), 0, 0, "-");
     record("contacts with a body (sum over steps)", static_cast<double>(body_contacts), 0, 0, "-");
+    const long gas_pairs = summary_count(heat, "gas_gap_pairs");
+    const long radiation_pairs = summary_count(heat, "radiation_pairs");
+    record("gas-gap exchanges (sum over steps)", static_cast<double>(gas_pairs), 0, 0, "-");
+    record("radiating pairs (sum over steps)", static_cast<double>(radiation_pairs), 0, 0, "-");
     record("resolved solves", static_cast<double>(c.solves), 0, 0, "-");
     record("most sub-steps in a thermal step", c.max_substeps, 0, 0, "-");
     record("mean CG iterations", static_cast<double>(c.iterations) / static_cast<double>(c.solves),
@@ -61,6 +74,8 @@ TEST(Validation28, MixedShapesInAnInsulatedBoxConserveHeat) {
     record("final mean temperature", heat.thermal_energy() / heat.heat_capacity(), 0, 0, "K");
     EXPECT_EQ(static_cast<long>(sys.particles().size()), 134);
     EXPECT_GT(body_contacts, 10000); // bodies conduct a lot, or the test proves nothing
+    EXPECT_GT(gas_pairs, 10000);     // and so do the gaps
+    EXPECT_GT(radiation_pairs, 10000);
     EXPECT_LT(drift, energy_tolerance);
     // No convection, flux or hot wall: only the rounding of the resolved solves' balance.
     EXPECT_NEAR(heat.external_heat(), 0.0, 1e-15 * e0);

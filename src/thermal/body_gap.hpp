@@ -1,0 +1,73 @@
+#pragma once
+// The gap between two particles that need not touch (gas-gap conduction and radiation between
+// bodies): the distance of their surfaces and the nearest points, from the shapes alone (the
+// mechanics' narrow phase only reports overlapping pairs). Theory: docs/theory/heat.md, "Gaps
+// between bodies".
+//
+// Every particle is split into convex cores with a margin: a sphere is its centre with margin R,
+// a clump its member spheres (centre, margin r_m), a superquadric or polyhedron itself (support
+// map, margin 0). The distance of two cores is found by GJK on their support maps (Gilbert,
+// Johnson & Keerthi 1988, IEEE J. Robot. Autom. 4, 193; van den Bergen 2003, Collision Detection
+// in Interactive 3D Environments, Sec. 4.3), the distance of the particles is the smallest core
+// distance minus both margins.
+
+#include "dynamics/system.hpp"
+#include "geometry/polyhedron.hpp"
+#include "geometry/superquadric.hpp"
+
+#include <cstddef>
+#include <vector>
+
+namespace kiln::thermal {
+
+/// The nearest points of two particles.
+struct BodyGap {
+    double gap = 0;              ///< surface distance (m); < 0 = overlap of sphere elements, 0 when
+                                 ///< two convex cores overlap (depth not measured)
+    Vec3 point_i = Vec3::Zero(); ///< nearest point on i's surface (m, world)
+    Vec3 point_j = Vec3::Zero(); ///< nearest point on j's surface (m, world)
+    Vec3 normal = Vec3::UnitX(); ///< unit direction from i towards j at the gap (world)
+    double member_radius_i = 0;  ///< radius of i's nearest sphere element (m); 0 for a convex body
+    double member_radius_j = 0;  ///< the same for j (m)
+    bool converged = true;       ///< false: GJK hit its iteration cap (gap is then an upper bound)
+};
+
+/// Gap and nearest points of every pair of elements (cores) of particles index `i` and `j` of
+/// `sys`: one for two convex bodies or spheres, one per member (pair) for clumps; in element
+/// order (i's elements outer). Overlapping convex cores as in body_gap.
+[[nodiscard]] std::vector<BodyGap> element_gaps(const dynamics::System& sys, std::size_t i,
+                                                std::size_t j);
+
+/// Gap and nearest points of particles index `i` and `j` of `sys` (any shapes): the element pair
+/// of smallest gap. Cores that
+/// overlap give gap 0 with the normal along the line of centres and the points where each body's
+/// support along it lies. The GJK distance is accurate to 1e-9 times the larger bounding radius.
+[[nodiscard]] BodyGap body_gap(const dynamics::System& sys, std::size_t i, std::size_t j);
+
+/// A convex core placed in the world: a point (sphere centre, clump member centre) or a convex
+/// body with a support map (superquadric, polyhedron).
+struct Core {
+    Vec3 x = Vec3::Zero();                                  ///< centre (m, world)
+    Quat q = Quat::Identity();                              ///< body -> world rotation
+    const geometry::Superquadric* superquadric = nullptr;   ///< set for a superquadric
+    const geometry::ConvexPolyhedron* polyhedron = nullptr; ///< set for a polyhedron
+
+    /// Point of the core farthest along the world direction `d` (m, world).
+    [[nodiscard]] Vec3 support(const Vec3& d) const;
+};
+
+/// GJK distance of two cores.
+struct CoreDistance {
+    double distance = 0;   ///< |a - b| (m); 0 when the cores overlap
+    Vec3 a = Vec3::Zero(); ///< nearest point of core A (m, world)
+    Vec3 b = Vec3::Zero(); ///< nearest point of core B (m, world)
+    bool overlap = false;  ///< the cores overlap (a, b then undefined)
+    bool converged = true; ///< false: the iteration cap was hit
+    int iterations = 0;    ///< GJK iterations (-)
+};
+
+/// Distance and nearest points of cores `a` and `b` by GJK, to the absolute tolerance
+/// `tolerance` (m) on the distance.
+[[nodiscard]] CoreDistance core_distance(const Core& a, const Core& b, double tolerance);
+
+} // namespace kiln::thermal
