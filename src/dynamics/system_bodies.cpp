@@ -355,18 +355,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         cb.m_eff[q] = g_ma[q] * g_mb[q] / (g_ma[q] + g_mb[q]);
                         q_ratio[q] = overlap / g_size[q];
                     }
-                    for (std::size_t q = 0; q < queued; ++q) {
-                        BodyContact& rec = next_contacts_[q_slot[q]].contact;
-                        rec.normal = Vec3(cb.n[0][q], cb.n[1][q], cb.n[2][q]);
-                        rec.point = Vec3(g_p[0][q], g_p[1][q], g_p[2][q]);
-                        rec.overlap = cb.overlap[q];
-                        rec.r_eff = cb.r_eff[q];
-                        if (record_body_onsets_ && q_new[q]) { // heat: impact onset (system.cpp)
-                            note_body_onset(next_contacts_[q_slot[q]].key, rec.normal, rec.point,
-                                            Vec3(cb.v[0][q], cb.v[1][q], cb.v[2][q]), cb.m_eff[q],
-                                            rec.r_eff);
-                        }
-                    }
                 }
 #pragma omp simd
                 for (std::size_t q = 0; q < queued; ++q) {
@@ -384,9 +372,22 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         p_.force[b] -= f;
                         p_.torque[b] += Vec3(cb.tj[0][q], cb.tj[1][q], cb.tj[2][q]) - rb.cross(f);
                     }
+                    // The record in one pass: sphere pairs fill in their geometry here too (the
+                    // law reads but does not change n, overlap, r_eff, v and m_eff).
                     BodyContact& rec = next_contacts_[q_slot[q]].contact;
                     rec.shear = Vec3(cb.s[0][q], cb.s[1][q], cb.s[2][q]);
                     rec.force = f;
+                    if (raw_pairs) {
+                        rec.normal = Vec3(cb.n[0][q], cb.n[1][q], cb.n[2][q]);
+                        rec.point = Vec3(g_p[0][q], g_p[1][q], g_p[2][q]);
+                        rec.overlap = cb.overlap[q];
+                        rec.r_eff = cb.r_eff[q];
+                        if (record_body_onsets_ && q_new[q]) { // heat: impact onset (system.cpp)
+                            note_body_onset(next_contacts_[q_slot[q]].key, rec.normal, rec.point,
+                                            Vec3(cb.v[0][q], cb.v[1][q], cb.v[2][q]), cb.m_eff[q],
+                                            rec.r_eff);
+                        }
+                    }
                     queue_totals->energy += cb.energy[q];
                     queue_totals->max_ratio = std::max(queue_totals->max_ratio, q_ratio[q]);
                     ++queue_totals->contacts;
