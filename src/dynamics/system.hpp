@@ -259,7 +259,17 @@ class System {
     std::vector<ContactGroup> body_groups_, next_groups_;
     void rekey_body_contacts();
     NarrowPhaseCounters np_;
-    std::vector<Element> elements_;            // elements of every particle, this step
+    // Elements of every particle, this step; only the slots of superquadrics and polyhedra are
+    // written (sphere elements live in member_c_ alone).
+    std::vector<Element> elements_;
+    std::vector<Element> pose_buf_; // scratch of posing one particle
+    // Centre (m, world) and radius (m) of every element of elements_, this step, 32 bytes each
+    // (radius 0 for an element that is not a sphere): what the member-pair loop reads.
+    struct MemberSphere {
+        double x, y, z, r;
+    };
+    std::vector<MemberSphere> member_c_;
+    std::vector<std::uint32_t> member_hits_;   // this step's touching member pairs (scratch)
     std::vector<std::uint32_t> element_begin_; // particle i: [begin[i], begin[i + 1])
     // Polyhedron features per template (empty for other shapes), built once in the constructor.
     std::vector<geometry::PolyhedronFeatures> poly_features_;

@@ -119,7 +119,7 @@ void System::build_member_pairs() {
     const double skin = nl_.skin();
     const auto all_spheres = [&](std::uint32_t i) {
         for (std::uint32_t e = element_begin_[i]; e < element_begin_[i + 1]; ++e) {
-            if (elements_[e].kind != Element::Kind::sphere) {
+            if (!(member_c_[e].r > 0.0)) {
                 return false;
             }
         }
@@ -137,16 +137,18 @@ void System::build_member_pairs() {
         }
         for (std::uint32_t ea = element_begin_[a]; ea < element_begin_[a + 1]; ++ea) {
             for (std::uint32_t eb = element_begin_[b]; eb < element_begin_[b + 1]; ++eb) {
-                const double reach = elements_[ea].radius + elements_[eb].radius + skin;
-                if ((elements_[ea].centre - elements_[eb].centre).squaredNorm() < reach * reach) {
+                const MemberSphere& A = member_c_[ea];
+                const MemberSphere& B = member_c_[eb];
+                const double reach = A.r + B.r + skin;
+                if ((Vec3(A.x, A.y, A.z) - Vec3(B.x, B.y, B.z)).squaredNorm() < reach * reach) {
                     member_pairs_.push_back({k, a, b, ea, eb});
                 }
             }
         }
     }
-    member_x_build_.resize(elements_.size());
-    for (std::size_t e = 0; e < elements_.size(); ++e) {
-        member_x_build_[e] = elements_[e].centre;
+    member_x_build_.resize(member_c_.size());
+    for (std::size_t e = 0; e < member_c_.size(); ++e) {
+        member_x_build_[e] = Vec3(member_c_[e].x, member_c_[e].y, member_c_[e].z);
     }
     members_valid_ = true;
 }
@@ -173,24 +175,57 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
     };
     const auto is_convex = [](const Element& e) { return e.kind != Element::Kind::sphere; };
     const bool first_touch = spec_.body_radius == BodyRadius::first_touch;
-    // Elements of every particle, posed once per step.
-    elements_.clear();
+    // Elements of every particle, posed once per step: centre and radius of every element in
+    // member_c_ (radius 0: not a sphere), the full Element in elements_ only for superquadrics
+    // and polyhedra (the slots of sphere elements are not written: element() builds those).
+    member_c_.clear();
     element_begin_.assign(p_.size() + 1, 0);
     for (std::size_t i = 0; i < p_.size(); ++i) {
-        element_begin_[i] = static_cast<std::uint32_t>(elements_.size());
-        const geometry::PolyhedronFeatures* features =
-            p_.shape[i] >= 0 && !poly_features_[static_cast<std::size_t>(p_.shape[i])].edges.empty()
-                ? &poly_features_[static_cast<std::size_t>(p_.shape[i])]
-                : nullptr;
-        if (p_.shape[i] < 0) { // a sphere
-            elements_.push_back({Element::Kind::sphere, p_.x[i], p_.radius[i], nullptr,
-                                 Quat::Identity(), p_.radius[i]});
+        element_begin_[i] = static_cast<std::uint32_t>(member_c_.size());
+        const geometry::ShapeTemplate* t = tmpl(static_cast<std::uint32_t>(i));
+        if (t == nullptr) { // a sphere
+            member_c_.push_back({p_.x[i].x(), p_.x[i].y(), p_.x[i].z(), p_.radius[i]});
             continue;
         }
-        append_elements(tmpl(static_cast<std::uint32_t>(i)), features, p_.x[i], p_.q[i], rot_[i],
-                        p_.radius[i], elements_);
+        if (const auto* c = std::get_if<geometry::Clump>(&t->shape)) { // as append_elements
+            for (const geometry::ClumpSphere& cs : c->spheres) {
+                const Vec3 centre = p_.x[i] + rot_[i] * cs.centre;
+                member_c_.push_back({centre.x(), centre.y(), centre.z(), cs.radius});
+            }
+            continue;
+        }
+        const geometry::PolyhedronFeatures* features =
+            !poly_features_[static_cast<std::size_t>(p_.shape[i])].edges.empty()
+                ? &poly_features_[static_cast<std::size_t>(p_.shape[i])]
+                : nullptr;
+        pose_buf_.clear();
+        append_elements(t, features, p_.x[i], p_.q[i], rot_[i], p_.radius[i], pose_buf_);
+        for (const Element& E : pose_buf_) {
+            const bool sphere = E.kind == Element::Kind::sphere;
+            const std::size_t e = member_c_.size();
+            member_c_.push_back(
+                {E.centre.x(), E.centre.y(), E.centre.z(), sphere ? E.radius : 0.0});
+            if (!sphere) {
+                if (elements_.size() <= e) {
+                    elements_.resize(e + 1);
+                }
+                elements_[e] = E;
+            }
+        }
     }
-    element_begin_[p_.size()] = static_cast<std::uint32_t>(elements_.size());
+    element_begin_[p_.size()] = static_cast<std::uint32_t>(member_c_.size());
+    if (elements_.size() < member_c_.size()) {
+        elements_.resize(member_c_.size());
+    }
+    // Element e of this step (world frame).
+    const auto element = [&](std::uint32_t e) -> Element {
+        const MemberSphere& c = member_c_[e];
+        if (c.r > 0.0) {
+            return {
+                Element::Kind::sphere, Vec3(c.x, c.y, c.z), c.r, nullptr, Quat::Identity(), c.r};
+        }
+        return elements_[e];
+    };
 
     std::visit(
         [&](const auto& law) {
@@ -320,18 +355,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         cb.m_eff[q] = g_ma[q] * g_mb[q] / (g_ma[q] + g_mb[q]);
                         q_ratio[q] = overlap / g_size[q];
                     }
-                    for (std::size_t q = 0; q < queued; ++q) {
-                        BodyContact& rec = next_contacts_[q_slot[q]].contact;
-                        rec.normal = Vec3(cb.n[0][q], cb.n[1][q], cb.n[2][q]);
-                        rec.point = Vec3(g_p[0][q], g_p[1][q], g_p[2][q]);
-                        rec.overlap = cb.overlap[q];
-                        rec.r_eff = cb.r_eff[q];
-                        if (record_body_onsets_ && q_new[q]) { // heat: impact onset (system.cpp)
-                            note_body_onset(next_contacts_[q_slot[q]].key, rec.normal, rec.point,
-                                            Vec3(cb.v[0][q], cb.v[1][q], cb.v[2][q]), cb.m_eff[q],
-                                            rec.r_eff);
-                        }
-                    }
                 }
 #pragma omp simd
                 for (std::size_t q = 0; q < queued; ++q) {
@@ -349,9 +372,22 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         p_.force[b] -= f;
                         p_.torque[b] += Vec3(cb.tj[0][q], cb.tj[1][q], cb.tj[2][q]) - rb.cross(f);
                     }
+                    // The record in one pass: sphere pairs fill in their geometry here too (the
+                    // law reads but does not change n, overlap, r_eff, v and m_eff).
                     BodyContact& rec = next_contacts_[q_slot[q]].contact;
                     rec.shear = Vec3(cb.s[0][q], cb.s[1][q], cb.s[2][q]);
                     rec.force = f;
+                    if (raw_pairs) {
+                        rec.normal = Vec3(cb.n[0][q], cb.n[1][q], cb.n[2][q]);
+                        rec.point = Vec3(g_p[0][q], g_p[1][q], g_p[2][q]);
+                        rec.overlap = cb.overlap[q];
+                        rec.r_eff = cb.r_eff[q];
+                        if (record_body_onsets_ && q_new[q]) { // heat: impact onset (system.cpp)
+                            note_body_onset(next_contacts_[q_slot[q]].key, rec.normal, rec.point,
+                                            Vec3(cb.v[0][q], cb.v[1][q], cb.v[2][q]), cb.m_eff[q],
+                                            rec.r_eff);
+                        }
+                    }
                     queue_totals->energy += cb.energy[q];
                     queue_totals->max_ratio = std::max(queue_totals->max_ratio, q_ratio[q]);
                     ++queue_totals->contacts;
@@ -361,7 +397,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // Queues the contact of sphere element A of body a with a plane or cylinder wall
             // (ec: element_wall_contact, touching); walls are at rest with infinite mass. Only
             // after the sphere pairs are flushed (raw_pairs false).
-            const auto queue_wall = [&](std::uint32_t a, const Element& A, const ElementContact& ec,
+            const auto queue_wall = [&](std::uint32_t a, double size, const ElementContact& ec,
                                         int material_w, const BodyContactKey& key,
                                         const ContactGroup& g, const BodyContact* old) {
                 const double r_eff =
@@ -386,7 +422,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 cb.set_pair(q, pairs_.at(p_.material[a], material_w));
                 q_a[q] = a;
                 q_b[q] = no_element;
-                q_ratio[q] = ec.overlap / ratio_size(A, nullptr);
+                q_ratio[q] = ec.overlap / size;
                 q_slot[q] = record(
                     key, g,
                     BodyContact{Vec3::Zero(), ec.normal, ec.point, ec.overlap, r_eff, Vec3::Zero()},
@@ -397,13 +433,17 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             };
             // Queues the contact of sphere elements A (of a) and B (of b), centres closer than the
             // sum of their radii (and distinct).
-            const auto queue_spheres = [&](std::uint32_t a, std::uint32_t b, const Element& A,
-                                           const Element& B, const BodyContactKey& key,
+            const auto queue_spheres = [&](std::uint32_t a, std::uint32_t b, const MemberSphere& A,
+                                           const MemberSphere& B, const BodyContactKey& key,
                                            const ContactGroup& g, const BodyContact* old) {
                 const std::size_t q = queued;
+                g_ca[0][q] = A.x;
+                g_ca[1][q] = A.y;
+                g_ca[2][q] = A.z;
+                g_cb[0][q] = B.x;
+                g_cb[1][q] = B.y;
+                g_cb[2][q] = B.z;
                 for (int c = 0; c < 3; ++c) {
-                    g_ca[c][q] = A.centre[c];
-                    g_cb[c][q] = B.centre[c];
                     g_xa[c][q] = p_.x[a][c];
                     g_xb[c][q] = p_.x[b][c];
                     g_va[c][q] = p_.v[a][c];
@@ -412,13 +452,13 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     cb.wj[c][q] = p_.omega[b][c];
                     cb.s[c][q] = old != nullptr ? old->shear[c] : 0.0;
                 }
-                g_rada[q] = A.radius;
-                g_radb[q] = B.radius;
+                g_rada[q] = A.r;
+                g_radb[q] = B.r;
                 g_ma[q] = p_.mass[a];
                 g_mb[q] = p_.mass[b];
                 // R*: with first_touch, that of the contact's first step (the same for spheres)
                 g_r0[q] = first_touch && old != nullptr ? old->r_eff : 0.0;
-                g_size[q] = ratio_size(A, &B);
+                g_size[q] = 2.0 * std::min(A.r, B.r); // ratio_size of two sphere elements
                 q_new[q] = old == nullptr;
                 cb.set_pair(q, pairs_.at(p_.material[a], p_.material[b]));
                 q_a[q] = a;
@@ -445,8 +485,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 // few of its members: 12 x 12 candidate pairs become about 2 x 2).
                 near_b.clear();
                 for (std::uint32_t eb = b0; eb < element_begin_[b + 1]; ++eb) {
-                    const double rb = elements_[eb].radius + p_.radius[a];
-                    if ((elements_[eb].centre - p_.x[a]).squaredNorm() < rb * rb) {
+                    const Element B = element(eb);
+                    const double rb = B.radius + p_.radius[a];
+                    if ((B.centre - p_.x[a]).squaredNorm() < rb * rb) {
                         near_b.push_back(eb);
                     }
                 }
@@ -454,14 +495,14 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     return;
                 }
                 for (std::uint32_t ea = a0; ea < element_begin_[a + 1]; ++ea) {
-                    const Element& A = elements_[ea];
+                    const Element A = element(ea);
                     const double rab = A.radius + p_.radius[b];
                     if ((A.centre - p_.x[b]).squaredNorm() >= rab * rab) {
                         continue;
                     }
                     const ContactGroup g(0, k, 0, ea - a0);
                     for (const std::uint32_t eb : near_b) {
-                        const Element& B = elements_[eb];
+                        const Element B = element(eb);
                         const double re = A.radius + B.radius;
                         if ((A.centre - B.centre).squaredNorm() >= re * re) {
                             continue; // bounding spheres apart: no contact, no history
@@ -473,7 +514,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         const bool convex = is_convex(A) || is_convex(B);
                         if (!convex) {
                             if (A.centre != B.centre) { // coincident centres: no normal
-                                queue_spheres(a, b, A, B, key, g, old);
+                                queue_spheres(a, b, member_c_[ea], member_c_[eb], key, g, old);
                             }
                             continue;
                         }
@@ -497,30 +538,60 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // b): the same contacts, the same evaluation order and so the same bits, without the
             // per-step bounding-sphere search inside each clump pair. A touching pair of sphere
             // elements implies the bounding-sphere tests the general route makes.
-            bool moved = !members_valid_ || member_x_build_.size() != elements_.size();
-            const double half_skin2 = 0.25 * nl_.skin() * nl_.skin();
-            for (std::size_t e = 0; e < elements_.size() && !moved; ++e) {
-                moved = (elements_[e].centre - member_x_build_[e]).squaredNorm() > half_skin2;
+            bool moved = !members_valid_ || member_x_build_.size() != member_c_.size();
+            if (!moved) { // largest squared displacement, without an early exit (vector lanes)
+                const double half_skin2 = 0.25 * nl_.skin() * nl_.skin();
+                const MemberSphere* c = member_c_.data();
+                const Vec3* x0 = member_x_build_.data();
+                double worst = 0.0;
+#pragma omp simd reduction(max : worst)
+                for (std::size_t e = 0; e < member_c_.size(); ++e) {
+                    const double d0 = c[e].x - x0[e].x();
+                    const double d1 = c[e].y - x0[e].y();
+                    const double d2 = c[e].z - x0[e].z();
+                    worst = std::max(worst, d0 * d0 + d1 * d1 + d2 * d2);
+                }
+                moved = worst > half_skin2;
             }
             if (moved) {
                 build_member_pairs();
             }
-            for (const MemberPair& m : member_pairs_) {
+            // First pass, without branches: the indices of the member pairs that touch (centres
+            // closer than the sum of the radii, and distinct: coincident centres have no normal)
+            // and of the general items, in list order. About one member pair in four touches, so
+            // a branch per pair was mispredicted often.
+            const std::size_t n_members = member_pairs_.size();
+            member_hits_.resize(n_members);
+            std::size_t n_hits = 0;
+            {
+                const MemberPair* mp = member_pairs_.data();
+                const MemberSphere* c = member_c_.data();
+                std::uint32_t* hits = member_hits_.data();
+                for (std::size_t i = 0; i < n_members; ++i) {
+                    const bool general = mp[i].ea == no_element;
+                    const MemberSphere& A = c[general ? 0U : mp[i].ea];
+                    const MemberSphere& B = c[general ? 0U : mp[i].eb];
+                    const double re = A.r + B.r;
+                    const double d0 = A.x - B.x;
+                    const double d1 = A.y - B.y;
+                    const double d2 = A.z - B.z;
+                    const double dd = d0 * d0 + d1 * d1 + d2 * d2;
+                    hits[n_hits] = static_cast<std::uint32_t>(i);
+                    n_hits += static_cast<std::size_t>(general | ((dd < re * re) & (dd != 0.0)));
+                }
+            }
+            for (std::size_t h = 0; h < n_hits; ++h) {
+                const MemberPair& m = member_pairs_[member_hits_[h]];
                 if (m.ea == no_element) {
                     general_entry(m.k, m.a, m.b);
                     continue;
-                }
-                const Element& A = elements_[m.ea];
-                const Element& B = elements_[m.eb];
-                const double re = A.radius + B.radius;
-                if ((A.centre - B.centre).squaredNorm() >= re * re || A.centre == B.centre) {
-                    continue; // apart (no history), or coincident centres (no normal)
                 }
                 const std::uint32_t ea = m.ea - element_begin_[m.a];
                 const ContactGroup g(0, m.k, 0, ea);
                 const BodyContactKey key{p_.id[m.a], p_.id[m.b], static_cast<std::int32_t>(ea),
                                          static_cast<std::int32_t>(m.eb - element_begin_[m.b])};
-                queue_spheres(m.a, m.b, A, B, key, g, find_old(g, key.eb));
+                queue_spheres(m.a, m.b, member_c_[m.ea], member_c_[m.eb], key, g,
+                              find_old(g, key.eb));
             }
 
             flush();
@@ -542,20 +613,34 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     }
                     const std::uint32_t a0 = element_begin_[a];
                     for (std::uint32_t ea = a0; ea < element_begin_[a + 1]; ++ea) {
-                        const ElementContact ec = element_wall_contact(elements_[ea], ws);
-                        if (!ec.touching) {
-                            continue;
-                        }
                         const BodyContactKey key{p_.id[a], -1 - static_cast<std::int64_t>(w),
                                                  static_cast<std::int32_t>(ea - a0), 0};
                         const ContactGroup g{1, a, static_cast<std::uint32_t>(w), ea - a0};
-                        if (elements_[ea].kind == Element::Kind::sphere) {
-                            queue_wall(a, elements_[ea], ec, spec_.walls[w].material, key, g,
+                        const MemberSphere& ms = member_c_[ea];
+                        if (ms.r > 0.0) { // a sphere element: element_wall_contact's sphere case
+                            const Vec3 centre(ms.x, ms.y, ms.z);
+                            const WallContact wc = std::visit(
+                                [&](const auto& s) { return wall_contact(s, centre, ms.r); }, ws);
+                            if (!(wc.overlap > 0.0)) {
+                                continue;
+                            }
+                            ElementContact ec;
+                            ec.touching = true;
+                            ec.overlap = wc.overlap;
+                            ec.normal = wc.n;
+                            ec.point = centre - (ms.r - 0.5 * wc.overlap) * wc.n;
+                            ec.r_eff = wc.r_eff;
+                            queue_wall(a, 2.0 * ms.r, ec, spec_.walls[w].material, key, g,
                                        find_old(g, key.eb));
                             continue;
                         }
+                        const Element& A = elements_[ea];
+                        const ElementContact ec = element_wall_contact(A, ws);
+                        if (!ec.touching) {
+                            continue;
+                        }
                         apply(a, -1, key, g, ec, find_old(g, key.eb), spec_.walls[w].material,
-                              ec.overlap / ratio_size(elements_[ea], nullptr), wall_totals);
+                              ec.overlap / ratio_size(A, nullptr), wall_totals);
                     }
                 }
             }
@@ -569,7 +654,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 for (std::uint32_t a = 0; a < p_.size(); ++a) {
                     const std::uint32_t a0 = element_begin_[a];
                     for (std::uint32_t ea = a0; ea < element_begin_[a + 1]; ++ea) {
-                        const Element& A = elements_[ea];
+                        const Element A = element(ea);
                         if (A.kind == Element::Kind::polyhedron) {
                             mw.mesh->polyhedron_contacts({A.poly, A.centre, A.q}, mesh_buf_);
                         } else if (A.kind == Element::Kind::sphere) {

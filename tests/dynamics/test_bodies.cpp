@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <gtest/gtest.h>
+#include <map>
 #include <numbers>
 
 namespace kiln::dynamics {
@@ -207,6 +208,96 @@ TEST(Bodies, MixedPourGivesTheSameBitsForOneAndTwoThreads) {
         EXPECT_EQ(a.particles().q[i].coeffs(), b.particles().q[i].coeffs());
     }
     EXPECT_EQ(a.narrow_phase_counters().failures, 0);
+}
+
+TEST(Bodies, SphereElementRecordsMatchTheElementQueries) {
+    // Sphere elements (clump members, spheres) are posed as centre-and-radius records and their
+    // pairs found by a first pass over the member-pair list; sphere members meet walls without an
+    // Element. Every such record must be the contact the element queries give from the
+    // particle's pose, and every touching sphere-element pair involving a body must be recorded.
+    System sys(mixed_pour(1));
+    constexpr double length_tol = 1e-13; // m; posing with R(q) in two forms differs by round-off
+    constexpr double normal_tol = 1e-9;  // unit normals of ~1e-5 m overlaps, same round-off
+    long checked_pairs = 0;
+    long checked_walls = 0;
+    for (int k = 0; k < 6000; ++k) {
+        sys.step();
+        if (k % 50 != 49) {
+            continue;
+        }
+        const ParticleStore& p = sys.particles();
+        const SceneSpec& spec = sys.spec();
+        std::vector<std::vector<Element>> el(p.size());
+        std::map<std::int64_t, std::size_t> index;
+        for (std::size_t i = 0; i < p.size(); ++i) {
+            index[p.id[i]] = i;
+            const auto* t =
+                p.shape[i] >= 0 ? &spec.shapes[static_cast<std::size_t>(p.shape[i])] : nullptr;
+            append_elements(t, p.x[i], p.q[i], p.radius[i], el[i]);
+        }
+        const auto sphere = [](const Element& e) { return e.kind == Element::Kind::sphere; };
+        long recorded_pairs = 0;
+        long recorded_walls = 0;
+        for (const BodyContactEntry& e : sys.body_contacts()) {
+            const Element& A = el[index.at(e.key.a)][static_cast<std::size_t>(e.key.ea)];
+            if (!sphere(A)) {
+                continue;
+            }
+            ElementContact q;
+            if (e.key.b >= 0) {
+                const Element& B = el[index.at(e.key.b)][static_cast<std::size_t>(e.key.eb)];
+                if (!sphere(B)) {
+                    continue;
+                }
+                q = element_contact(A, B, spec.narrow_phase, nullptr);
+                ++recorded_pairs;
+                ++checked_pairs;
+            } else {
+                q = element_wall_contact(A,
+                                         spec.walls[static_cast<std::size_t>(-1 - e.key.b)].shape);
+                ++checked_walls;
+                ++recorded_walls;
+            }
+            ASSERT_TRUE(q.touching);
+            EXPECT_NEAR(e.contact.overlap, q.overlap, length_tol);
+            EXPECT_LT((e.contact.normal - q.normal).norm(), normal_tol);
+            EXPECT_LT((e.contact.point - q.point).norm(), length_tol);
+        }
+        // Brute force: touching sphere-element pairs with a body on either side.
+        long touching = 0;
+        for (std::size_t i = 0; i < p.size(); ++i) {
+            for (std::size_t j = i + 1; j < p.size(); ++j) {
+                if (p.shape[i] < 0 && p.shape[j] < 0) {
+                    continue; // sphere pairs are the sphere kernel's
+                }
+                for (const Element& a : el[i]) {
+                    for (const Element& b : el[j]) {
+                        const double rs = a.radius + b.radius;
+                        touching +=
+                            sphere(a) && sphere(b) && (a.centre - b.centre).squaredNorm() < rs * rs
+                                ? 1
+                                : 0;
+                    }
+                }
+            }
+        }
+        EXPECT_EQ(recorded_pairs, touching) << "step " << k;
+        // Brute force: touching sphere elements of bodies against the analytic walls.
+        long touching_walls = 0;
+        for (std::size_t i = 0; i < p.size(); ++i) {
+            for (const Element& a : el[i]) {
+                for (const Wall& w : spec.walls) {
+                    touching_walls +=
+                        p.shape[i] >= 0 && sphere(a) && element_wall_contact(a, w.shape).touching
+                            ? 1
+                            : 0;
+                }
+            }
+        }
+        EXPECT_EQ(recorded_walls, touching_walls) << "step " << k;
+    }
+    EXPECT_GT(checked_pairs, 0);
+    EXPECT_GT(checked_walls, 0);
 }
 
 /// Superballs (m = 2/e = 4) poured into a tube with the given law and body radius rule.
