@@ -4,6 +4,7 @@
 // two-sphere collisions, which README.md predicts to fall at order 2.5 (Hertz) and 2 (linear).
 
 #include "dynamics/system.hpp"
+#include "energy_box.hpp"
 #include "validation.hpp"
 
 #include <algorithm>
@@ -35,21 +36,6 @@ constexpr int collisions = 400;
 /// Step sizes relative to the case's time step.
 constexpr std::array<double, 4> step_factors{1.0, 0.5, 0.25, 0.125};
 
-/// Least-squares slope of log(y) against log(x).
-double log_slope(const std::vector<double>& x, const std::vector<double>& y) {
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    const auto n = static_cast<double>(x.size());
-    for (std::size_t k = 0; k < x.size(); ++k) {
-        const double lx = std::log(x[k]);
-        const double ly = std::log(y[k]);
-        sx += lx;
-        sy += ly;
-        sxx += lx * lx;
-        sxy += lx * ly;
-    }
-    return (n * sxy - sx * sy) / (n * sxx - sx * sx);
-}
-
 /// Replaces the case's law by the linear spring (no clamp, so restitution 1 means no dashpot).
 io::CaseSpec linear_case(io::CaseSpec spec) {
     // k_n = 2000 N/m: t_c = pi sqrt(m*/k_n) = 1.6e-4 s for two 1 mm spheres, close to Hertz at 1
@@ -59,36 +45,8 @@ io::CaseSpec linear_case(io::CaseSpec spec) {
     return spec;
 }
 
-/// One box run: the largest relative deviation of the total energy and the pair collisions seen.
-struct BoxRun {
-    double max_error = 0;
-    long contact_steps = 0;
-};
-
-/// Runs the box of the case at step dt with insertion seed and velocities of realisation r.
-BoxRun box_run(io::CaseSpec spec, double dt, int r) {
-    spec.scene.time_step = dt;
-    spec.scene.seed += static_cast<std::uint64_t>(r);
-    dynamics::System sys(spec.scene);
-    // Velocity components up to 1/sqrt(3) m/s and spins up to 300 rad/s, the same for every dt.
-    std::mt19937_64 rng(1000 + static_cast<std::uint64_t>(r));
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    auto& p = sys.particles();
-    for (std::size_t i = 0; i < p.size(); ++i) {
-        p.v[i] = Vec3(u(rng), u(rng), u(rng)) / std::sqrt(3.0);
-        p.omega[i] = 300.0 * Vec3(u(rng), u(rng), u(rng));
-    }
-    sys.refresh();
-    const double e0 = sys.energies().total();
-    BoxRun out;
-    const long steps = std::lround(spec.run.end_time / dt);
-    for (long s = 0; s < steps; ++s) {
-        sys.step();
-        out.max_error = std::max(out.max_error, std::abs(sys.energies().total() - e0) / e0);
-        out.contact_steps += sys.counters().particle_contacts + sys.counters().wall_contacts;
-    }
-    return out;
-}
+/// Velocities, spins up to 300 rad/s, the random streams of realisation r: seed 1000 + r.
+constexpr BoxStart start{1000, 300.0, false};
 
 void check_box(const io::CaseSpec& spec, const std::string& label) {
     std::vector<double> dts;
@@ -100,7 +58,7 @@ void check_box(const io::CaseSpec& spec, const std::string& label) {
         double lo = 1.0;
         double hi = 0.0;
         for (int r = 0; r < realisations; ++r) {
-            const BoxRun b = box_run(spec, dt, r);
+            const BoxRun b = box_run(spec, dt, r, start);
             ASSERT_GT(b.contact_steps, 0) << "no collisions: the case tests nothing";
             sum += b.max_error;
             lo = std::min(lo, b.max_error);

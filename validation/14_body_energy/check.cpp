@@ -3,6 +3,7 @@
 // the order of velocity Verlet with the symmetric rotation splitting (2). See README.md.
 
 #include "dynamics/system.hpp"
+#include "energy_box.hpp"
 #include "validation.hpp"
 
 #include <algorithm>
@@ -10,7 +11,6 @@
 #include <cmath>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -34,54 +34,8 @@ constexpr int realisations = 4;
 /// Step sizes relative to the case's time step.
 constexpr std::array<double, 3> step_factors{1.0, 0.5, 0.25};
 
-double log_slope(const std::vector<double>& x, const std::vector<double>& y) {
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    const auto n = static_cast<double>(x.size());
-    for (std::size_t k = 0; k < x.size(); ++k) {
-        const double lx = std::log(x[k]);
-        const double ly = std::log(y[k]);
-        sx += lx;
-        sy += ly;
-        sxx += lx * lx;
-        sxy += lx * ly;
-    }
-    return (n * sxy - sx * sy) / (n * sxx - sx * sx);
-}
-
-struct BoxRun {
-    double max_error = 0;
-    long contact_steps = 0;
-    long failures = 0;
-};
-
-/// One run at step dt, realisation r: velocity components up to 1/sqrt(3) m/s and spins up to
-/// 100 rad/s (the same for every dt).
-BoxRun box_run(io::CaseSpec spec, double dt, int r) {
-    spec.scene.time_step = dt;
-    spec.scene.seed += static_cast<std::uint64_t>(r);
-    dynamics::System sys(spec.scene);
-    std::mt19937_64 rng(2000 + static_cast<std::uint64_t>(r));
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    auto& p = sys.particles();
-    for (std::size_t i = 0; i < p.size(); ++i) {
-        p.v[i] = Vec3(u(rng), u(rng), u(rng)) / std::sqrt(3.0);
-        const Vec3 w = 100.0 * Vec3(u(rng), u(rng), u(rng));
-        const Mat3 rot = p.q[i].toRotationMatrix();
-        p.omega[i] = w;
-        p.ang_mom[i] = rot * (p.inertia[i].asDiagonal() * (rot.transpose() * w));
-    }
-    sys.refresh();
-    const double e0 = sys.energies().total();
-    BoxRun out;
-    const long steps = std::lround(spec.run.end_time / dt);
-    for (long s = 0; s < steps; ++s) {
-        sys.step();
-        out.max_error = std::max(out.max_error, std::abs(sys.energies().total() - e0) / e0);
-        out.contact_steps += sys.counters().particle_contacts + sys.counters().wall_contacts;
-    }
-    out.failures = sys.narrow_phase_counters().failures;
-    return out;
-}
+/// Velocities, spins up to 100 rad/s and the matching angular momenta; seed 2000 + r.
+constexpr BoxStart start{2000, 100.0, true};
 
 /// Runs the step-size study; returns the observed order. `strict`: assert `least_order` and the
 /// bound at dt/4.
@@ -95,7 +49,7 @@ double check_box(const io::CaseSpec& spec, const std::string& label, bool strict
         double sum = 0.0;
         double hi = 0.0;
         for (int r = 0; r < realisations; ++r) {
-            const BoxRun b = box_run(spec, dt, r);
+            const BoxRun b = box_run(spec, dt, r, start);
             EXPECT_GT(b.contact_steps, 0) << "no collisions: the case tests nothing";
             EXPECT_EQ(b.failures, 0) << label;
             sum += b.max_error;

@@ -5,6 +5,7 @@
 // over patches with the remainder on the last one), so what remains is the linear solver's
 // residual.
 
+#include "closed_bed.hpp"
 #include "common/closed_heat_run.hpp"
 #include "dynamics/system.hpp"
 #include "thermal/thermal_system.hpp"
@@ -30,31 +31,12 @@ TEST(Validation26, ClosedInsulatedBedConservesHeat) {
     thermal::ThermalSystem heat(spec.heat, sys);
     const long steps = std::lround(spec.run.end_time / sys.dt());
     const test::ClosedHeatRun run = test::run_closed_heat(sys, heat, steps);
-    const double e0 = run.initial_energy;
-    const double drift = run.drift;
-    const double lo = run.lowest;
-    const double hi = run.highest;
     const auto& c = heat.counters();
     record("thermal steps", static_cast<double>(c.thermal_steps), 0, 0, "-");
     record("conducting contacts (sum over steps)", static_cast<double>(c.contacts), 0, 0, "-");
-    record("resolved solves", static_cast<double>(c.solves), 0, 0, "-");
-    record("most sub-steps in a thermal step", c.max_substeps, 0, 0, "-");
-    record("largest lag ratio dt G / C_patch", c.max_lag_ratio, 0, 0, "-");
-    record("mean CG iterations", static_cast<double>(c.iterations) / static_cast<double>(c.solves),
-           0, 0, "-");
-    record("max relative drift of sum C T", drift, 0.0, energy_tolerance, "-");
-    record("external heat", heat.external_heat(), 0.0, 0.0, "J");
-    record("lowest temperature", lo, 300.0, range_tolerance, "K");
-    record("highest temperature", hi, 600.0, range_tolerance, "K");
-    record("final mean temperature", heat.thermal_energy() / heat.heat_capacity(), 0, 0, "K");
+    record_closed_run(heat, run, energy_tolerance, range_tolerance);
     EXPECT_GT(c.contacts, 100000); // many contacts, or the test proves nothing
-    EXPECT_LT(drift, energy_tolerance);
-    // No convection, flux or hot wall: the external account holds only the rounding of the
-    // resolved solves' balance (heat_in minus the contact rates), J relative to the stored heat.
-    EXPECT_NEAR(heat.external_heat(), 0.0, 1e-15 * e0);
-    EXPECT_GE(lo, 300.0 - range_tolerance);
-    EXPECT_LE(hi, 600.0 + range_tolerance);
-    EXPECT_EQ(c.unconverged, 0);
+    expect_closed_run(heat, run, energy_tolerance, range_tolerance);
 }
 
 } // namespace

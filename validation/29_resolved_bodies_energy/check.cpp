@@ -6,6 +6,7 @@
 // initial range). Validation 28 covers superquadrics and lumped clumps (superquadrics and
 // polyhedra do not meet in one scene yet).
 
+#include "closed_bed.hpp"
 #include "common/closed_heat_run.hpp"
 #include "dynamics/system.hpp"
 #include "thermal/thermal_system.hpp"
@@ -60,10 +61,6 @@ TEST(Validation29, ResolvedClumpsAndPolyhedraInAnInsulatedBoxConserveHeat) {
             polyhedron_contacts += ki == 2 || kj == 2 ? 1 : 0;
         }
     });
-    const double e0 = run.initial_energy;
-    const double drift = run.drift;
-    const double lo = run.lowest;
-    const double hi = run.highest;
     const auto& c = heat.counters();
     record("particles", static_cast<double>(sys.particles().size()), 0, 0, "-");
     record("thermal steps", static_cast<double>(c.thermal_steps), 0, 0, "-");
@@ -72,27 +69,13 @@ TEST(Validation29, ResolvedClumpsAndPolyhedraInAnInsulatedBoxConserveHeat) {
            "-");
     record("contacts with a polyhedron (sum over steps)", static_cast<double>(polyhedron_contacts),
            0, 0, "-");
-    record("resolved solves", static_cast<double>(c.solves), 0, 0, "-");
-    record("most sub-steps in a thermal step", c.max_substeps, 0, 0, "-");
-    record("mean CG iterations", static_cast<double>(c.iterations) / static_cast<double>(c.solves),
-           0, 0, "-");
-    record("max relative drift of sum C T", drift, 0.0, energy_tolerance, "-");
-    record("external heat", heat.external_heat(), 0.0, 0.0, "J");
-    record("lowest temperature", lo, 300.0, range_tolerance, "K");
-    std::printf("  lowest temperature - 300 K: %.3e K\n", lo - 300.0);
-    record("highest temperature", hi, 600.0, range_tolerance, "K");
-    record("final mean temperature", heat.thermal_energy() / heat.heat_capacity(), 0, 0, "K");
+    record_closed_run(heat, run, energy_tolerance, range_tolerance);
     EXPECT_EQ(static_cast<long>(sys.particles().size()), 118);
     // Both kinds conduct a lot (walls are adiabatic and not counted by the heat module, but
     // counted here), or the test proves nothing.
     EXPECT_GT(clump_contacts, 2000);
     EXPECT_GT(polyhedron_contacts, 2000);
-    EXPECT_LT(drift, energy_tolerance);
-    // No convection, flux or hot wall: only the rounding of the resolved solves' balance.
-    EXPECT_NEAR(heat.external_heat(), 0.0, 1e-15 * e0);
-    EXPECT_GE(lo, 300.0 - range_tolerance);
-    EXPECT_LE(hi, 600.0 + range_tolerance);
-    EXPECT_EQ(c.unconverged, 0);
+    expect_closed_run(heat, run, energy_tolerance, range_tolerance);
     EXPECT_EQ(sys.narrow_phase_counters().failures, 0);
 }
 
