@@ -1,3 +1,4 @@
+#include "common/case_text.hpp"
 #include "io/case_reader.hpp"
 
 #include "core/error.hpp"
@@ -37,32 +38,18 @@ count = 100
 radius = { distribution = "uniform", min = 0.8e-3, max = 1.2e-3 }
 )";
 
-/// Replaces the first occurrence of `from` in the good case.
+/// The good case with the first occurrence of `from` replaced by `to`.
 std::string edit(const std::string& from, const std::string& to) {
-    std::string s = good;
-    const auto pos = s.find(from);
-    EXPECT_NE(pos, std::string::npos) << from;
-    return s.replace(pos, from.size(), to);
+    return test::edited(good, from, to);
 }
 
-/// The error message of reading `text`, or "" when it reads fine.
+/// The error message of reading `text` (as case.toml, or as the file `path`), or "" when it reads
+/// fine.
 std::string error_of(const std::string& text) {
-    try {
-        read_case_text(text, "case.toml");
-    } catch (const InputError& e) {
-        return e.what();
-    }
-    return "";
+    return test::case_error(text);
 }
-
-/// The error message of reading `text` as if it were the file `path`, or "" when it reads fine.
 std::string error_of_file(const std::string& text, const std::string& path) {
-    try {
-        read_case_text(text, path);
-    } catch (const InputError& e) {
-        return e.what();
-    }
-    return "";
+    return test::case_error(text, path);
 }
 
 TEST(CaseReader, GoodCaseReadsWithDefaultsFilledIn) {

@@ -1,4 +1,5 @@
 // Reader tests of the heat keys: [heat], [material.heat], wall and particle temperatures.
+#include "common/case_text.hpp"
 #include "io/case_reader.hpp"
 
 #include "core/error.hpp"
@@ -63,19 +64,11 @@ flow_direction = [0, 0, 1]
 )";
 
 std::string edit(const std::string& from, const std::string& to) {
-    std::string s = base;
-    const auto pos = s.find(from);
-    EXPECT_NE(pos, std::string::npos) << from;
-    return s.replace(pos, from.size(), to);
+    return test::edited(base, from, to);
 }
 
 std::string error_of(const std::string& text) {
-    try {
-        read_case_text(text, "case.toml");
-    } catch (const InputError& e) {
-        return e.what();
-    }
-    return "";
+    return test::case_error(text);
 }
 
 TEST(CaseReaderHeat, HeatKeysReadWithDefaults) {
