@@ -501,6 +501,7 @@ void read_heat(Section& root, CaseSpec& c, const toml::table& doc) {
     }
     h.collision_conduction = s.boolean("collision_conduction", false);
     c.scene.record_contact_onsets = h.collision_conduction; // the force loop records impacts
+    h.sphere_rotation = s.boolean("sphere_rotation", true);
     h.field_output = s.boolean("field_output", false);
     if (const toml::node* n = s.take("field_particles")) {
         const toml::array* a = n->as_array();

@@ -164,6 +164,8 @@ constexpr char heat_magic[8] = {'K', 'I', 'L', 'N', 'H', 'E', 'A', 'T'};
 
 /// Tag of the optional list of pending impacts (thermal::PendingImpact) after the heat section.
 constexpr char onset_magic[8] = {'K', 'I', 'L', 'N', 'I', 'M', 'P', '1'};
+/// Tag of the optional grid orientations of resolved spheres (ThermalState::orientations), last.
+constexpr char orientation_magic[8] = {'K', 'I', 'L', 'N', 'O', 'R', 'I', '1'};
 /// Tag of the same list before impacts carried body-frame contacts (not readable any more).
 constexpr char old_onset_magic[8] = {'K', 'I', 'L', 'N', 'O', 'N', 'S', 'T'};
 
@@ -193,15 +195,20 @@ std::optional<thermal::ThermalState> read_checkpoint_heat(const std::filesystem:
     }
     thermal::ThermalState t;
     heat_fields(in, t);
-    // Optional: contact onsets not yet exchanged (collision conduction).
+    // Optional, in this order: contact onsets not yet exchanged (collision conduction), the
+    // grid orientations of resolved spheres.
     char o[sizeof onset_magic] = {};
     f.read(o, sizeof o);
     if (f && std::memcmp(o, onset_magic, sizeof onset_magic) == 0) {
         in.vec(t.onsets);
+        f.read(o, sizeof o);
     } else if (f && std::memcmp(o, old_onset_magic, sizeof old_onset_magic) == 0) {
         throw InputError(file.string(), 0, "",
                          "pending contact onsets in an older checkpoint format (before impacts "
                          "of bodies): restart the run from its case file");
+    }
+    if (f && std::memcmp(o, orientation_magic, sizeof orientation_magic) == 0) {
+        in.vec(t.orientations);
     }
     return t;
 }
@@ -236,6 +243,10 @@ void write_checkpoint(const std::filesystem::path& file, const dynamics::SystemS
                 static_assert(std::is_trivially_copyable_v<thermal::PendingImpact>);
                 f.write(onset_magic, sizeof onset_magic);
                 out.vec(copy.onsets);
+            }
+            if (!copy.orientations.empty()) {
+                f.write(orientation_magic, sizeof orientation_magic);
+                out.vec(copy.orientations);
             }
         }
         if (!f) {

@@ -60,6 +60,11 @@ struct HeatSpec {
     /// particles (spheres or bodies) or of a particle and a wall (analytic or mesh) at a
     /// temperature exchanges the impact heat once. Needs SceneSpec::record_contact_onsets.
     bool collision_conduction = false;
+    /// Resolved spheres' fields turn with their spin: each keeps an orientation (body -> world),
+    /// advanced every mechanical step by its angular velocity, that places contacts, gaps and the
+    /// flow direction on its grid. Off: a sphere's grid keeps the world axes (its spin is ignored
+    /// thermally, as before 2026-11-24).
+    bool sphere_rotation = true;
     /// Temperature of the black enclosure every heated surface with an emissivity radiates to:
     /// q = eps sigma (T_s^4 - T^4) per surface cell (resolved) or particle (lumped), any shape
     /// (K); NaN = no radiation to the ambient.

@@ -26,8 +26,8 @@ std::vector<int> ThermalSystem::gap_patches(const dynamics::System& sys, const R
                                             double radius) const {
     const ParticleStore& p = sys.particles();
     const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
-    // World -> body frame (spheres carry the identity).
-    const Quat inv = p.shape[k] >= 0 ? p.q[k].conjugate() : Quat::Identity();
+    // World -> body frame (a sphere's grid: its own orientation, or the world axes).
+    const Quat inv = grid_orientation(p, k, r).conjugate();
     const Vec3 x = inv * (point - p.x[k]);
     const Vec3 nb = inv * n;
     std::vector<int> out = heat::contact_patches(*t.grid, x, nb, radius);

@@ -150,10 +150,10 @@ void ThermalSystem::add_contacts(const dynamics::System& sys, std::vector<double
         d.conductance =
             heat::static_contact_conductance(hi.conductivity, hj.conductivity, rc, correction);
         // Patches under the contact disc, in each body frame: world offsets and normals turned
-        // by q^-1 for bodies (world -> body); spheres have no orientation (world axes).
-        const auto patches = [&](const Record& r, std::uint32_t k, bool body, const Vec3& n) {
+        // by q^-1 (world -> body; a resolved sphere's grid has its own orientation).
+        const auto patches = [&](const Record& r, std::uint32_t k, const Vec3& n) {
             const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
-            const Quat inv = body ? p.q[k].conjugate() : Quat::Identity();
+            const Quat inv = grid_orientation(p, k, r).conjugate();
             const Vec3 x = inv * (rec.point - p.x[k]);
             const Vec3 nb = inv * n;
             std::vector<int> out = heat::contact_patches(*t.grid, x, nb, rc);
@@ -163,10 +163,10 @@ void ThermalSystem::add_contacts(const dynamics::System& sys, std::vector<double
             return out;
         };
         if (d.a.templ >= 0) {
-            d.patches_a = patches(d.a, rec.i, body_i, rec.normal);
+            d.patches_a = patches(d.a, rec.i, rec.normal);
         }
         if (!rec.wall && d.b.templ >= 0) {
-            d.patches_b = patches(d.b, rec.j, body_j, -rec.normal);
+            d.patches_b = patches(d.b, rec.j, -rec.normal);
         }
         // The capacity that answers a lagged contact rate within one step: the whole lumped
         // particle, or the cells under the contact of a resolved one (a conservative choice: the

@@ -20,6 +20,16 @@ namespace kiln::thermal {
 
 using namespace detail;
 
+void ThermalSystem::sphere_patches(const ParticleStore& p, std::size_t k, const Record& r,
+                                   const Vec3& n, double radius, std::vector<int>& out) const {
+    if (r.templ < 0) {
+        return;
+    }
+    const Vec3 nb = grid_orientation(p, k, r).conjugate() * n;
+    out = heat::contact_patches(*templates_[static_cast<std::size_t>(r.templ)]->grid,
+                                p.radius[k] * nb, nb, radius);
+}
+
 void ThermalSystem::add_gas_gaps(const dynamics::System& sys, std::vector<double>& g_sum,
                                  double& worst) {
     if (!(spec_.gas.conductivity > 0.0)) {
@@ -64,17 +74,11 @@ void ThermalSystem::add_gas_gaps(const dynamics::System& sys, std::vector<double
             continue;
         }
         // Resolved spheres take the heat on the patches under the lens r <= r_sf around the
-        // line of centres (world axes = body frame for spheres).
+        // line of centres, turned into each sphere's grid frame.
         const Vec3 n = between / s;
         const double lens = heat::gas_gap_radius(r[np.i], r[np.j], s, spec_.gas);
-        if (d.a.templ >= 0) {
-            d.patches_a = heat::contact_patches(
-                *templates_[static_cast<std::size_t>(d.a.templ)]->grid, r[np.i] * n, n, lens);
-        }
-        if (d.b.templ >= 0) {
-            d.patches_b = heat::contact_patches(
-                *templates_[static_cast<std::size_t>(d.b.templ)]->grid, -r[np.j] * n, -n, lens);
-        }
+        sphere_patches(p, np.i, d.a, n, lens, d.patches_a);
+        sphere_patches(p, np.j, d.b, -n, lens, d.patches_b);
         g_sum[np.i] += d.conductance;
         g_sum[np.j] += d.conductance;
         worst = std::max(worst, d.conductance / patch_capacity(d.a, d.patches_a) +
@@ -150,17 +154,11 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
         const double af = heat::pair_view_area(r[np.i], r[np.j], apart);
         ambient_view(d.a) -= af / sphere_area(r[np.i]);
         ambient_view(d.b) -= af / sphere_area(r[np.j]);
-        // Resolved spheres exchange over the hemisphere facing the partner (world axes = body
-        // frame for spheres): its area-weighted cell temperature, and the heat spread over it.
+        // Resolved spheres exchange over the hemisphere facing the partner (in each sphere's
+        // grid frame): its area-weighted cell temperature, and the heat spread over it.
         const Vec3 n = between / s;
-        if (d.a.templ >= 0) {
-            d.patches_a = heat::contact_patches(
-                *templates_[static_cast<std::size_t>(d.a.templ)]->grid, r[np.i] * n, n, r[np.i]);
-        }
-        if (d.b.templ >= 0) {
-            d.patches_b = heat::contact_patches(
-                *templates_[static_cast<std::size_t>(d.b.templ)]->grid, -r[np.j] * n, -n, r[np.j]);
-        }
+        sphere_patches(p, np.i, d.a, n, r[np.i], d.patches_a);
+        sphere_patches(p, np.j, d.b, -n, r[np.j], d.patches_b);
         // Lag limit with the linearised conductance at the hotter side's current temperature.
         const double g = heat::radiative_conductance_bound(
             d.conductance, contact_temperature(d.a, d, false), contact_temperature(d.b, d, true));

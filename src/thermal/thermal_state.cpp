@@ -124,9 +124,7 @@ std::vector<FieldView> ThermalSystem::fields(const dynamics::System& sys,
         v.spherical = t.spherical ? &t.res : nullptr;
         v.field = pool_.field(r.slot);
         v.position = p.x[i];
-        if (p.shape[i] >= 0) {
-            v.q = p.q[i];
-        }
+        v.q = grid_orientation(p, i, r);
         out.push_back(v);
     }
     std::sort(out.begin(), out.end(),
@@ -142,6 +140,11 @@ ThermalState ThermalSystem::save_state() const {
     s.external_heat = external_heat_;
     s.counters = counters_;
     s.onsets = onsets_;
+    if (turning_spheres_) {
+        for (const Quat& q : pool_q_) {
+            s.orientations.insert(s.orientations.end(), {q.w(), q.x(), q.y(), q.z()});
+        }
+    }
     return s;
 }
 
@@ -162,6 +165,16 @@ void ThermalSystem::restore_state(const ThermalState& s, const dynamics::System&
     external_heat_ = s.external_heat;
     counters_ = s.counters;
     onsets_ = s.onsets;
+    if (!s.orientations.empty() && s.orientations.size() != 4 * pool_q_.size()) {
+        throw InputError("heat: the checkpoint's grid orientations do not fit this case; restart "
+                         "with the case that wrote it");
+    }
+    for (std::size_t k = 0; k < pool_q_.size(); ++k) {
+        pool_q_[k] = s.orientations.empty()
+                         ? Quat::Identity()
+                         : Quat(s.orientations[4 * k], s.orientations[4 * k + 1],
+                                s.orientations[4 * k + 2], s.orientations[4 * k + 3]);
+    }
 }
 
 void ThermalSystem::set_temperature(std::int64_t id, double t) {

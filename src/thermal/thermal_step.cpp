@@ -17,11 +17,47 @@ namespace kiln::thermal {
 
 using namespace detail;
 
+Quat ThermalSystem::grid_orientation(const ParticleStore& p, std::size_t k, const Record& r) const {
+    if (p.shape[k] >= 0) {
+        return p.q[k];
+    }
+    if (r.templ >= 0 && spec_.sphere_rotation) {
+        return pool_q_[static_cast<std::size_t>(r.slot)];
+    }
+    return Quat::Identity();
+}
+
+void ThermalSystem::turn_spheres(const dynamics::System& sys) {
+    // q <- exp(omega dt / 2) q with the world-frame angular velocity at the end of the step
+    // (first order in dt: the grid only has to follow the spin, the mechanics do not read it).
+    // A sphere at rest keeps its orientation bit for bit.
+    const ParticleStore& p = sys.particles();
+    const double dt = sys.dt();
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        const auto id = static_cast<std::size_t>(p.id[i]);
+        if (p.shape[i] >= 0 || id >= by_id_.size() || by_id_[id].templ < 0) {
+            continue;
+        }
+        const Vec3& w = p.omega[i];
+        const double rate = w.norm();
+        if (!(rate > 0.0)) {
+            continue;
+        }
+        const double half = 0.5 * rate * dt;
+        const Vec3 axis = w * (std::sin(half) / rate);
+        const Quat turn(std::cos(half), axis.x(), axis.y(), axis.z());
+        Quat& q = pool_q_[static_cast<std::size_t>(by_id_[id].slot)];
+        q = (turn * q).normalized();
+    }
+}
+
 bool ThermalSystem::after_step(const dynamics::System& sys) {
+    if (turning_spheres_) {
+        turn_spheres(sys);
+    }
     if (spec_.collision_conduction && !sys.contact_onsets().empty()) {
         // Each side's contact in its body frame now, at the step that found the impact: a body
-        // turns before the thermal step exchanges the heat. Spheres carry no orientation (world
-        // axes): their contact point is R n.
+        // (or a resolved sphere's grid) turns before the thermal step exchanges the heat.
         sync(sys); // a particle inserted in this step may already have touched
         const ParticleStore& p = sys.particles();
         index_.assign(by_id_.size(), -1);
@@ -38,13 +74,11 @@ bool ThermalSystem::after_step(const dynamics::System& sys) {
                 return; // the particle left the scene: add_collisions skips it
             }
             const auto i = static_cast<std::size_t>(index_[static_cast<std::size_t>(id)]);
-            Vec3 xb = p.radius[i] * n;
-            Vec3 nn = n;
-            if (p.shape[i] >= 0) {
-                const Quat inv = p.q[i].conjugate();
-                xb = inv * (point - p.x[i]);
-                nn = inv * n;
-            }
+            // Spheres: the contact point is r n on the sphere; bodies: the element contact's.
+            const Quat inv =
+                grid_orientation(p, i, by_id_[static_cast<std::size_t>(id)]).conjugate();
+            const Vec3 xb = inv * (p.shape[i] >= 0 ? Vec3(point - p.x[i]) : Vec3(p.radius[i] * n));
+            const Vec3 nn = inv * n;
             for (int q = 0; q < 3; ++q) {
                 x[q] = xb[q];
                 nb[q] = nn[q];

@@ -17,6 +17,8 @@ void ThermalSystem::prepare_surface(const dynamics::System& sys, double& worst) 
     const ParticleStore& p = sys.particles();
     // Bodies under f(theta): h per face for the current orientation (flow direction turned into
     // the body frame with q^-1); the lagged part (G_b(h f) - G_b(h)) / C_cell joins the lag limit.
+    // Resolved spheres whose grid has turned (sphere_rotation): the same against the world-axes
+    // distribution their template matrix holds.
     // Resolved particles radiating to the ambient: the lagged face rate's linearised conductance
     // A / (1 / (4 eps sigma T^3) + d / k) at the hotter of node and ambient joins the lag limit.
     const double t_rad = spec_.radiation_temperature;
@@ -45,19 +47,24 @@ void ThermalSystem::prepare_surface(const dynamics::System& sys, double& worst) 
     stagnant_.assign(static_cast<std::size_t>(pool_.size()), 0);
     for (std::size_t i = 0; i < p.size(); ++i) {
         const Record& r = by_id_[static_cast<std::size_t>(p.id[i])];
-        if (r.templ < 0 || !templates_[static_cast<std::size_t>(r.templ)]->turning_stagnation) {
+        if (r.templ < 0) {
             continue;
         }
         const Template& t = *templates_[static_cast<std::size_t>(r.templ)];
+        const Quat q = grid_orientation(p, i, r);
+        if (!t.turning_stagnation &&
+            !(t.sphere_stagnation && q.coeffs() != Quat::Identity().coeffs())) {
+            continue;
+        }
         const std::vector<double> hf = heat::stagnation_distribution(
-            *t.grid, p.q[i].conjugate() * (-spec_.flow_direction), spec_.heat_transfer_coefficient);
+            *t.grid, q.conjugate() * (-spec_.flow_direction), spec_.heat_transfer_coefficient);
         const std::size_t off = face_offset_[static_cast<std::size_t>(r.slot)];
         for (std::size_t b = 0; b < hf.size(); ++b) {
             stag_h_[off + b] = hf[b];
             const heat::BoundaryFace& f = t.grid->boundary[b];
-            const double dg =
-                heat::surface_conductance(f, hf[b], t.props.conductivity) -
-                heat::surface_conductance(f, spec_.heat_transfer_coefficient, t.props.conductivity);
+            const double h_matrix = t.h_face.size() == 1 ? t.h_face[0] : t.h_face[b];
+            const double dg = heat::surface_conductance(f, hf[b], t.props.conductivity) -
+                              heat::surface_conductance(f, h_matrix, t.props.conductivity);
             worst = std::max(worst, std::abs(dg) / t.capacity[static_cast<std::size_t>(f.cell)]);
         }
         stagnant_[static_cast<std::size_t>(r.slot)] = 1;
@@ -109,7 +116,8 @@ void ThermalSystem::add_surface_rates() {
         const std::span<double> conv(conv_rate_.data() + off, nb);
         heat::lagged_convection(*t.grid, t.props.conductivity,
                                 std::span<const double>(stag_h_.data() + off, nb),
-                                std::span<const double>(&h_mean, 1),
+                                t.sphere_stagnation ? std::span<const double>(t.h_face)
+                                                    : std::span<const double>(&h_mean, 1),
                                 std::span<const double>(&t_inf, 1), pool_.field(slot), conv);
         for (std::size_t b = 0; b < nb; ++b) {
             face_rate_[off + b] += conv[b];

@@ -202,16 +202,18 @@ int ThermalSystem::template_for(const dynamics::System& sys, std::size_t i) {
             body != nullptr ? heat_shape(*body) : heat::Shape{heat::Sphere{radius}};
         t->grid = std::make_shared<const heat::ThermalGrid>(heat::make_cartesian_grid(shape, cr));
     }
-    // Spheres have no orientation: body frame = world axes, so the stagnation direction is the
-    // same in every sphere and the local h goes into the template matrix exactly. Bodies turn:
-    // their matrix keeps the uniform mean h, and h f(theta) of the body's current orientation
-    // enters as the lagged correction of convection.hpp (thermal_step).
+    // Spheres: the stagnation distribution for the world axes goes into the template matrix
+    // exactly; a sphere whose grid has turned (sphere_rotation) gets the difference to the
+    // distribution of its own orientation lagged (prepare_surface), which vanishes while it has
+    // not turned. Bodies turn: their matrix keeps the uniform mean h, and h f(theta) of the
+    // body's current orientation enters as the lagged correction of convection.hpp.
     if (spec_.heat_transfer_coefficient > 0.0 && spec_.stagnation && body != nullptr) {
         t->h_face = {spec_.heat_transfer_coefficient};
         t->turning_stagnation = true;
     } else if (spec_.heat_transfer_coefficient > 0.0 && spec_.stagnation) {
         t->h_face = heat::stagnation_distribution(*t->grid, -spec_.flow_direction,
                                                   spec_.heat_transfer_coefficient);
+        t->sphere_stagnation = true;
     } else if (spec_.heat_transfer_coefficient > 0.0) {
         t->h_face = {spec_.heat_transfer_coefficient};
     }
@@ -289,6 +291,8 @@ void ThermalSystem::sync(const dynamics::System& sys) {
             const heat::ThermalGrid& g = *templates_[static_cast<std::size_t>(r.templ)]->grid;
             r.slot = pool_.add(g.size(), t0);
             pool_template_.push_back(r.templ);
+            pool_q_.push_back(Quat::Identity());
+            turning_spheres_ = turning_spheres_ || (spec_.sphere_rotation && p.shape[i] < 0);
             face_offset_.push_back(face_rate_.size());
             face_rate_.resize(face_rate_.size() + g.boundary.size(), 0.0);
             stag_h_.resize(face_rate_.size(), 0.0);

@@ -13,9 +13,10 @@
 //
 // Frames: contacts come from System::collect_contacts in the world frame. For a body they are
 // rotated into its body frame with the inverse of its orientation q (body -> world) before they
-// reach the template grid, so its field turns with it. Spheres carry no orientation (q = identity
-// in ParticleStore): a resolved sphere's field does not turn with the sphere, which a sphere's
-// symmetry makes harmless except under the stagnation distribution of h.
+// reach the template grid, so its field turns with it. Spheres carry no orientation in the
+// ParticleStore; a resolved sphere's grid gets one here (sphere_rotation, on by default),
+// advanced every mechanical step by the sphere's angular velocity (after_step), so its field
+// turns with its spin too. Without it a sphere's grid keeps the world axes.
 
 #include "dynamics/system.hpp"
 #include "heat/resolved_model.hpp"
@@ -70,6 +71,9 @@ struct ThermalState {
     ThermalCounters counters;      ///< counters so far
     /// Contact onsets taken from the System since the last thermal step (collision conduction).
     std::vector<PendingImpact> onsets;
+    /// Orientation (body -> world) of every pool slot's grid as w, x, y, z: resolved spheres'
+    /// own (sphere_rotation), identity for bodies (theirs is the System's). Empty: all identity.
+    std::vector<double> orientations;
 };
 
 /// Per-particle temperatures for output, by particle index of the store (K).
@@ -86,7 +90,8 @@ struct FieldView {
     const heat::SphericalResolution* spherical = nullptr; ///< set for spherical grids
     std::span<const double> field;                        ///< cell temperatures (K)
     Vec3 position = Vec3::Zero();                         ///< centre (m, world)
-    Quat q = Quat::Identity(); ///< body -> world rotation of the grid (identity for spheres)
+    /// Body -> world rotation of the grid (a resolved sphere's own under sphere_rotation).
+    Quat q = Quat::Identity();
 };
 
 /// The temperatures of a System and their coupling.
@@ -161,6 +166,16 @@ class ThermalSystem {
     struct ContactData;
 
     void sync(const dynamics::System& sys);
+    /// Turns every resolved sphere's grid by its angular velocity over one mechanical step.
+    void turn_spheres(const dynamics::System& sys);
+    /// Body -> world rotation of particle index k's grid (record r): a body's orientation, a
+    /// resolved sphere's own (sphere_rotation), otherwise the identity (world axes).
+    [[nodiscard]] Quat grid_orientation(const ParticleStore& p, std::size_t k,
+                                        const Record& r) const;
+    /// Patches of sphere index k (record r; none unless resolved) within `radius` (m) of the
+    /// point of its surface facing the world direction `n`, found in its grid frame.
+    void sphere_patches(const ParticleStore& p, std::size_t k, const Record& r, const Vec3& n,
+                        double radius, std::vector<int>& out) const;
     int template_for(const dynamics::System& sys, std::size_t i);
     heat::ResolvedOperator& operator_for(Template& t, int substeps, int thread);
     [[nodiscard]] double capacity_of(const Record& r) const;
@@ -244,6 +259,8 @@ class ThermalSystem {
     std::vector<double> radius_;     // by particle id (m)
     heat::TemperaturePool pool_;
     std::vector<int> pool_template_;        // template of each pool slot
+    std::vector<Quat> pool_q_;              // grid orientation of each pool slot (spheres)
+    bool turning_spheres_ = false;          // some resolved sphere's grid turns (sphere_rotation)
     std::vector<double> lumped_;            // lumped temperatures (K)
     std::vector<double> lumped_capacity_;   // rho c V (J/K)
     std::vector<double> lumped_area_;       // surface area (m^2)

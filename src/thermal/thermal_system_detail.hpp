@@ -67,6 +67,9 @@ struct ThermalSystem::Template {
     double full_cell_capacity = 0;   // capacity of a full Cartesian cell, rho c_p h^3 (J/K)
     bool turning_stagnation = false; // a body under f(theta): uniform h in the matrix, the rest
                                      // lagged per body and thermal step
+    // A sphere under f(theta): h_face holds the distribution for the world axes (exact, implicit);
+    // a sphere whose grid has turned (sphere_rotation) gets the difference to its own lagged.
+    bool sphere_stagnation = false;
 };
 
 /// One conducting contact of the current thermal step, with its patches in each body.

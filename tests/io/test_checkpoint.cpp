@@ -115,6 +115,8 @@ TEST(Checkpoint, RestartContinuesTemperaturesBitForBit) {
     thermal::ThermalSystem ha(pour_heat(), a);
     advance(a, ha, 3000);
     const thermal::ThermalState saved = ha.save_state();
+    // The spheres' grids have turned with their spin (sphere_rotation): the restart needs them.
+    EXPECT_EQ(saved.orientations.size(), 4 * a.particles().size());
     write_checkpoint(file, a.save_state(), &saved);
     advance(a, ha, 3000);
     dynamics::System b(pour());
