@@ -707,11 +707,17 @@ CaseSpec read_case_text(const std::string& text, const std::string& name) {
         const double T = c.run.end_time;
         c.output.vtk_interval = s.real("vtk_interval", T / 50.0, non_negative(), "s");
         c.output.monitor_interval = s.real("monitor_interval", T / 200.0, positive(), "s");
+        // Group monitors: the mean temperature of the spheres and of each shape template.
+        std::vector<std::string> allowed = monitor_names();
+        allowed.push_back(std::string(group_temperature_prefix) + "sphere");
+        for (const auto& shape : c.scene.shapes) {
+            allowed.push_back(group_temperature_prefix + shape.name);
+        }
         c.output.monitors =
             s.strings("monitors",
                       std::vector<std::string>{"time", "kinetic_energy", "rotational_energy",
                                                "contacts", "coordination", "max_overlap_ratio"},
-                      monitor_names());
+                      allowed);
         c.output.checkpoint_interval = s.real("checkpoint_interval", 0.0, non_negative(), "s");
         c.output.progress = s.boolean("progress", true);
         s.finish();

@@ -38,7 +38,11 @@ struct CaseSpec {
     std::string resolved_toml; ///< the case with every default filled in, as TOML text
 };
 
-/// Names accepted in OutputSpec::monitors.
+/// Names accepted in OutputSpec::monitors (besides the group monitors below).
 const std::vector<std::string>& monitor_names();
+
+/// Prefix of the group monitors: "mean_temperature:NAME" is the heat-capacity-weighted mean
+/// temperature (K) of the particles of shape template NAME, or of the spheres for NAME "sphere".
+inline constexpr const char* group_temperature_prefix = "mean_temperature:";
 
 } // namespace kiln::io

@@ -52,6 +52,13 @@ int monitor_index(const std::string& name) {
     return static_cast<int>(it - all.begin());
 }
 
+/// The group of a group monitor ("mean_temperature:NAME" -> "NAME"), or "" for any other name.
+std::string group_of(const std::string& name) {
+    return name.starts_with(group_temperature_prefix)
+               ? name.substr(std::string_view(group_temperature_prefix).size())
+               : std::string();
+}
+
 /// Heights of the particles along the direction opposing gravity (m).
 struct Heights {
     double mean = 0; ///< mean height (m), NaN without particles
@@ -109,6 +116,46 @@ class Sampler {
         }
         KILN_ASSERT(false);
         return std::numeric_limits<double>::quiet_NaN();
+    }
+
+    /// Heat-capacity-weighted mean temperature (K) of the particles of shape template `group`
+    /// ("sphere": the spheres); NaN without heat or without heated particles of that group.
+    [[nodiscard]] double group_mean_temperature(const std::string& group) const {
+        const double nan = std::numeric_limits<double>::quiet_NaN();
+        if (heat_ == nullptr) {
+            return nan;
+        }
+        int shape = -1;
+        if (group != "sphere") {
+            const auto& shapes = sys_.spec().shapes;
+            const auto it = std::find_if(shapes.begin(), shapes.end(),
+                                         [&](const auto& t) { return t.name == group; });
+            if (it == shapes.end()) {
+                return nan;
+            }
+            shape = static_cast<int>(it - shapes.begin());
+        }
+        const ParticleStore& p = sys_.particles();
+        double c_sum = 0.0;
+        double ct_sum = 0.0;
+        for (std::size_t i = 0; i < p.size(); ++i) {
+            if (std::max(p.shape[i], -1) != shape) {
+                continue;
+            }
+            const double c = heat_->heat_capacity(sys_, i);
+            if (c > 0.0) {
+                c_sum += c;
+                ct_sum += c * heat_->mean_temperature(sys_, i);
+            }
+        }
+        return c_sum > 0.0 ? ct_sum / c_sum : nan;
+    }
+
+    /// Value of the monitor called `name` (standard or group).
+    double value(const std::string& name) {
+        const std::string group = group_of(name);
+        return group.empty() ? value(static_cast<Monitor>(monitor_index(name)))
+                             : group_mean_temperature(group);
     }
 
   private:
@@ -219,13 +266,13 @@ const std::vector<std::string>& monitor_names() {
 
 double monitor_value(const dynamics::System& sys, const std::string& name) {
     Sampler s(sys);
-    return s.value(static_cast<Monitor>(monitor_index(name)));
+    return s.value(name);
 }
 
 double monitor_value(const dynamics::System& sys, const thermal::ThermalSystem* heat,
                      const std::string& name) {
     Sampler s(sys, heat);
-    return s.value(static_cast<Monitor>(monitor_index(name)));
+    return s.value(name);
 }
 
 void MonitorWriter::Closer::operator()(std::FILE* f) const {
@@ -246,7 +293,7 @@ MonitorWriter::MonitorWriter(std::filesystem::path csv, std::vector<std::string>
     : file_(std::move(csv)), names_(std::move(names)) {
     columns_.reserve(names_.size());
     for (const auto& n : names_) {
-        columns_.push_back(monitor_index(n));
+        columns_.push_back(group_of(n).empty() ? monitor_index(n) : -1); // -1: a group monitor
     }
     if (names_.empty()) {
         return;
@@ -318,7 +365,8 @@ void MonitorWriter::write(const dynamics::System& sys) {
     Sampler s(sys, heat_);
     last_row_.resize(columns_.size());
     for (std::size_t k = 0; k < columns_.size(); ++k) {
-        last_row_[k] = s.value(static_cast<Monitor>(columns_[k]));
+        last_row_[k] = columns_[k] >= 0 ? s.value(static_cast<Monitor>(columns_[k]))
+                                        : s.group_mean_temperature(group_of(names_[k]));
     }
     if (out_) {
         put(fmt::format("{:.10g}\n", fmt::join(last_row_, ",")));

@@ -65,6 +65,11 @@ double ThermalSystem::mean_temperature(const dynamics::System& sys, std::size_t 
                                   pool_.field(r.slot));
 }
 
+double ThermalSystem::heat_capacity(const dynamics::System& sys, std::size_t i) const {
+    const auto id = static_cast<std::size_t>(sys.particles().id[i]);
+    return id < by_id_.size() ? capacity_of(by_id_[id]) : 0.0;
+}
+
 double ThermalSystem::thermal_energy() const {
     double e = 0.0;
     for (std::size_t k = 0; k < lumped_.size(); ++k) {

@@ -134,6 +134,8 @@ class ThermalSystem {
     void particle_temperatures(const dynamics::System& sys, ParticleTemperatures& out) const;
     /// Volume-mean temperature of particle index `i` (K); NaN without a heat model.
     [[nodiscard]] double mean_temperature(const dynamics::System& sys, std::size_t i) const;
+    /// Heat capacity m c_p of particle index `i` (J/K); 0 without a heat model.
+    [[nodiscard]] double heat_capacity(const dynamics::System& sys, std::size_t i) const;
     /// Stored heat sum C T of all heated particles relative to 0 K (J).
     [[nodiscard]] double thermal_energy() const;
     /// Total heat capacity of the heated particles (J/K).

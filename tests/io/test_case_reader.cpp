@@ -158,6 +158,17 @@ TEST(CaseReader, UnknownMonitorIsRejected) {
     EXPECT_NE(e.find("output.monitors: \"temperature\" is not allowed"), std::string::npos) << e;
 }
 
+TEST(CaseReader, GroupTemperatureMonitorsNameTheSpheresOrAShapeOfTheCase) {
+    EXPECT_EQ(error_of(good + "\n[output]\nmonitors = [\"time\", \"mean_temperature:sphere\"]\n"),
+              "");
+    // The good case has no shape templates: a template name is not a group of it.
+    const std::string e = error_of(good + "\n[output]\nmonitors = [\"mean_temperature:cube\"]\n");
+    EXPECT_NE(e.find("output.monitors: \"mean_temperature:cube\" is not allowed"),
+              std::string::npos)
+        << e;
+    EXPECT_NE(e.find("mean_temperature:sphere"), std::string::npos) << e; // listed as allowed
+}
+
 // --- Non-spherical particles -------------------------------------------------------------------
 
 namespace shapes_test {
@@ -236,6 +247,23 @@ shape = "cylinder_12"
     ASSERT_EQ(c.scene.particles.size(), 1U);
     EXPECT_FALSE(c.scene.particles[0].orientation.random); // particles default to identity
     EXPECT_NE(c.resolved_toml.find("narrow_phase = 'gjk_epa'"), std::string::npos);
+}
+
+TEST(CaseReader, GroupTemperatureMonitorsAcceptTheCasesShapes) {
+    const std::string text = shapes_test::with_bodies(R"([[particle]]
+material = "glass"
+position = [0.01, 0.01, 0.005]
+shape = "cylinder_12"
+
+[output]
+monitors = ["time", "mean_temperature:cylinder_12", "mean_temperature:sphere"]
+)");
+    const CaseSpec c = read_case_text(text, "case.toml");
+    EXPECT_EQ(c.output.monitors.size(), 3U);
+    EXPECT_NE(
+        error_of(test::edited(text, "mean_temperature:cylinder_12", "mean_temperature:cylinder"))
+            .find("\"mean_temperature:cylinder\" is not allowed"),
+        std::string::npos);
 }
 
 TEST(CaseReader, NarrowPhaseDefaultsToNewton) {

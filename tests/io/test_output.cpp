@@ -1,3 +1,4 @@
+#include "common/cube_template.hpp"
 #include "core/error.hpp"
 #include "dynamics/system.hpp"
 #include "geometry/mesh_wall.hpp"
@@ -27,6 +28,7 @@
 #include <fstream>
 #include <limits>
 #include <memory>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -428,6 +430,57 @@ TEST(Monitors, EveryNameEvaluatesAndUnknownNamesAreInputErrors) {
     EXPECT_THROW(static_cast<void>(monitor_value(sys, "temperature")), InputError);
     const TempDir dir;
     EXPECT_THROW(MonitorWriter(dir.path() / "m.csv", {"time", "nonsense"}), InputError);
+}
+
+TEST(Monitors, GroupTemperaturesAreTheCapacityWeightedMeansOfEachShape) {
+    // Two lumped spheres (r and 2 r, so capacities 1 : 8) at 300 and 400 K and two equal lumped
+    // cubes at 500 and 600 K, far apart: the sphere group's mean is (300 + 8 400) / 9 K, the
+    // cubes' 550 K; a template not in the scene and a run without heat give NaN.
+    dynamics::SceneSpec s;
+    s.materials.push_back({"a", 1e7, 0.3, 2700, 0.5, 0.3, 0.0});
+    s.gravity = Vec3::Zero();
+    s.time_step = 1e-5;
+    s.shapes.push_back(test::cube_template(1e-3));
+    s.particles.push_back({0, 1e-3, Vec3(0, 0, 0), Vec3::Zero(), Vec3::Zero()});
+    s.particles.push_back({0, 2e-3, Vec3(0.01, 0, 0), Vec3::Zero(), Vec3::Zero()});
+    for (const double x : {0.02, 0.03}) {
+        dynamics::ParticleSpec cube;
+        cube.x = Vec3(x, 0, 0);
+        cube.shape = 0;
+        s.particles.push_back(cube);
+    }
+    const System sys(s);
+    thermal::HeatSpec h;
+    h.enabled = true;
+    thermal::MaterialHeat m;
+    m.enabled = true;
+    m.conductivity = 1.0;
+    m.specific_heat = 900;
+    m.initial_temperature = 300;
+    m.model = heat::HeatModel::lumped;
+    h.materials = {m};
+    h.particle_temperature = {300.0, 400.0, 500.0, 600.0};
+    const thermal::ThermalSystem heat(h, sys);
+    EXPECT_NEAR(monitor_value(sys, &heat, "mean_temperature:sphere"), 3500.0 / 9.0, 1e-12 * 400);
+    EXPECT_NEAR(monitor_value(sys, &heat, "mean_temperature:cube"), 550.0, 1e-12 * 550);
+    EXPECT_TRUE(std::isnan(monitor_value(sys, &heat, "mean_temperature:pyramid")));
+    EXPECT_TRUE(std::isnan(monitor_value(sys, nullptr, "mean_temperature:cube")));
+    // The whole scene's mean weighs the groups by their capacities.
+    double c_sphere = 0.0;
+    double c_cube = 0.0;
+    for (std::size_t i = 0; i < sys.particles().size(); ++i) {
+        (sys.particles().shape[i] < 0 ? c_sphere : c_cube) += heat.heat_capacity(sys, i);
+    }
+    EXPECT_NEAR(c_sphere, 9.0 * 2700 * 900 * 4.0 / 3.0 * std::numbers::pi * 1e-9, 1e-12 * c_sphere);
+    EXPECT_NEAR(monitor_value(sys, &heat, "mean_temperature"),
+                (c_sphere * 3500.0 / 9.0 + c_cube * 550.0) / (c_sphere + c_cube), 1e-9);
+    // The writer evaluates group columns like the others.
+    const TempDir dir;
+    MonitorWriter w(dir.path() / "m.csv", {"time", "mean_temperature:cube"});
+    w.set_heat(&heat);
+    w.write(sys);
+    ASSERT_EQ(w.last_row().size(), 2U);
+    EXPECT_NEAR(w.last_row()[1], 550.0, 1e-12 * 550);
 }
 
 TEST(MonitorWriter, CsvHasHeaderAndOneFullPrecisionRowPerWrite) {
