@@ -466,6 +466,36 @@ template <class Body> std::pair<Body, Body> near_pair(Body a, Body b, std::mt199
     return {a, b};
 }
 
+TEST(PolyhedronContact, PatchOnDemandGivesTheSameNumbers) {
+    // The overload with a patch test gives the depth, normal and feature of the full query bit for
+    // bit, whatever the test answers, and the full result when it asks for the patch.
+    std::mt19937_64 rng(31);
+    for (const std::string name : {"cube", "icosahedron", "cylinder_16"}) {
+        SCOPED_TRACE(name);
+        const g::PolyhedronFeatures f = load(name);
+        int touching = 0;
+        for (int n = 0; n < 300; ++n) {
+            const RandomPair p = random_pair(f, f, rng);
+            const g::PolyhedronContact full = g::polyhedron_contact(p.a, p.b, true);
+            for (const bool want : {false, true}) {
+                const g::PolyhedronContact lazy = g::polyhedron_contact(
+                    p.a, p.b, [&](const g::PolyhedronContact&) { return want; });
+                ASSERT_EQ(lazy.touching, full.touching);
+                ASSERT_EQ(lazy.depth, full.depth); // exact equality is the point
+                ASSERT_EQ(lazy.normal, full.normal);
+                ASSERT_EQ(lazy.feature, full.feature);
+                if (want) {
+                    ASSERT_EQ(lazy.point, full.point);
+                    ASSERT_EQ(lazy.patch_area, full.patch_area);
+                    ASSERT_EQ(lazy.patch.size(), full.patch.size());
+                }
+            }
+            touching += full.touching ? 1 : 0;
+        }
+        EXPECT_GT(touching, 250); // random_pair overlaps along a direction: most pairs touch
+    }
+}
+
 TEST(SeparatingAxis, PortalSearchProvesOnlyTrueGapsAndFindsClearOnes) {
     // find_separating_direction answers only with a proof: each direction it returns leaves a gap
     // larger than the margin, and the exact common plane finds the pair apart too. A pair that the
