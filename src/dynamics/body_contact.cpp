@@ -614,15 +614,7 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
     Element e{Element::Kind::polyhedron, x, r, nullptr, q, inradius};
     e.poly = features;
     e.hull = &hull;
-    // The equivalent radius is a function of the template's volume only: the last value is kept
-    // per thread, so a step does not take one cube root per body (the same number either way).
-    thread_local double last_volume = -1.0;
-    thread_local double last_r_equiv = 0.0;
-    if (t->volume != last_volume) {
-        last_volume = t->volume;
-        last_r_equiv = equivalent_radius(*t);
-    }
-    e.r_equiv = last_r_equiv;
+    e.r_equiv = equivalent_radius(*t);
     out.push_back(e);
 }
 
