@@ -3,6 +3,8 @@
 
 #include "dynamics/body_contact.hpp"
 
+#include "geometry/separating_axis.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -98,6 +100,20 @@ double concave_wall_radius(const Element& a, const Vec3& p_body, const Vec3& n, 
     const double floor = 0.5 * kmin;
     const double lo = kRadiusFloor * a.min_size;
     return std::max(1.0 / std::sqrt(std::max(rel[0], floor) * std::max(rel[1], floor)), lo);
+}
+
+/// Margin of a separation proof, relative to the sum of the bounding radii (-): a cached or
+/// searched direction skips the narrow phase only if the gap along it exceeds this, far above the
+/// round-off of the support evaluations and of the exact queries (1e-16 relative), so a pair
+/// skipped is one they would find apart too.
+constexpr double kSeparationMargin = 1e-10;
+
+/// Is the pair (posed a, b; bounding radii sum `rsum`, m) apart along the cached direction `sep`
+/// (unit, from b to a, world frame; zero: none) by more than the margin?
+template <class A, class B>
+bool cached_apart(const A& a, const B& b, double rsum, const Vec3* sep) {
+    return sep != nullptr && sep->squaredNorm() > 0.0 &&
+           geometry::overlap_along(a, b, *sep) < -kSeparationMargin * rsum;
 }
 
 /// Exponent below which a superquadric counts as blocky for the separation gate (-).
@@ -256,12 +272,10 @@ void near_support(const geometry::PosedPolyhedron& p, const Vec3& d, double over
 /// point is put half way through the overlap. An edge lying on a face: the band-weighted average
 /// of its two vertices (continuous into the single vertex as it tilts). Parallel faces keep the
 /// patch centroid `patch_point`: the overlap is not differentiable there.
-Vec3 pair_point(const geometry::PosedPolyhedron& a, const geometry::PosedPolyhedron& b,
-                const Vec3& m, double delta, const Vec3& patch_point) {
-    thread_local std::vector<std::pair<Vec3, double>> va;
-    thread_local std::vector<std::pair<Vec3, double>> vb;
-    near_support(a, -m, delta, va);
-    near_support(b, m, delta, vb);
+/// `va`, `vb`: near_support of a along -m and of b along m.
+Vec3 pair_point(const std::vector<std::pair<Vec3, double>>& va,
+                const std::vector<std::pair<Vec3, double>>& vb, const Vec3& m, double delta,
+                const Vec3& patch_point) {
     const auto average = [](const std::vector<std::pair<Vec3, double>>& v) {
         Vec3 sum = Vec3::Zero();
         double wsum = 0.0;
@@ -310,6 +324,24 @@ Vec3 pair_point(const geometry::PosedPolyhedron& a, const geometry::PosedPolyhed
     return patch_point;
 }
 
+/// As above, the vertices near the supports found here.
+Vec3 pair_point(const geometry::PosedPolyhedron& a, const geometry::PosedPolyhedron& b,
+                const Vec3& m, double delta, const Vec3& patch_point) {
+    thread_local std::vector<std::pair<Vec3, double>> va;
+    thread_local std::vector<std::pair<Vec3, double>> vb;
+    near_support(a, -m, delta, va);
+    near_support(b, m, delta, vb);
+    return pair_point(va, vb, m, delta, patch_point);
+}
+
+/// Does pair_point read the patch centroid, given its near_support lists? Only when at least
+/// three vertices of each body lie within the band (two faces parallel within the band);
+/// otherwise it takes vertices or edges and the patch goes unread.
+bool pair_point_needs_patch(const std::vector<std::pair<Vec3, double>>& va,
+                            const std::vector<std::pair<Vec3, double>>& vb) {
+    return va.size() >= 3 && vb.size() >= 3;
+}
+
 /// Hertz radius of two polyhedra: the volume-equivalent spheres in series.
 double polyhedron_pair_radius(const Element& a, const Element& b) {
     return a.r_equiv * b.r_equiv / (a.r_equiv + b.r_equiv);
@@ -317,19 +349,33 @@ double polyhedron_pair_radius(const Element& a, const Element& b) {
 
 /// Two polyhedron elements: fast common plane (default) or libccd GJK/EPA with the common-plane
 /// patch along EPA's normal. Normal from b to a; point: pair_point.
-ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase method) {
+ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase method, Vec3* sep) {
     ElementContact out;
     const geometry::PosedPolyhedron pa{a.poly, a.centre, a.q};
     const geometry::PosedPolyhedron pb{b.poly, b.centre, b.q};
-    // Separating-axis shortcut along the line of centres (two support evaluations).
+    // Separating-axis shortcuts: last step's separating direction, then the line of centres (two
+    // support evaluations each).
+    if (cached_apart(pa, pb, a.radius + b.radius, sep)) {
+        out.proved_apart = true;
+        return out;
+    }
     const Vec3 line = a.centre - b.centre;
     if (line.squaredNorm() > 0.0) {
         const Vec3 m = line.normalized();
         if (m.dot(pb.support(m)) - m.dot(pa.support(-m)) < 0.0) {
+            if (sep != nullptr) {
+                *sep = m;
+            }
             return out;
         }
     }
+    if (sep != nullptr) {
+        sep->setZero();
+    }
     geometry::PolyhedronContact pc;
+    thread_local std::vector<std::pair<Vec3, double>> va;
+    thread_local std::vector<std::pair<Vec3, double>> vb;
+    bool near_known = false; // va, vb hold the near supports of pc's plane
     if (method == NarrowPhase::gjk_epa) {
         const geometry::ConvexContact cc = geometry::ccd_contact(pa, pb, false);
         out.converged = cc.converged;
@@ -338,8 +384,21 @@ ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase m
         }
         pc = geometry::contact_patch_along(pa, pb, cc.normal);
     } else {
-        pc = geometry::polyhedron_contact(pa, pb, true);
+        // The patch only where pair_point reads it (face on face): the same numbers as with it.
+        // (The plane's normal and depth are those of the result, so the lists serve pair_point.)
+        pc = geometry::polyhedron_contact(pa, pb, [&](const geometry::PolyhedronContact& c) {
+            if (!c.touching) {
+                return false;
+            }
+            near_support(pa, -c.normal, c.depth, va);
+            near_support(pb, c.normal, c.depth, vb);
+            near_known = true;
+            return pair_point_needs_patch(va, vb);
+        });
         out.converged = pc.converged;
+        if (pc.converged && !pc.touching && pc.depth < 0.0 && sep != nullptr) {
+            *sep = pc.normal; // the common plane of the largest gap
+        }
         if (!pc.converged || !pc.touching) {
             return out;
         }
@@ -350,7 +409,8 @@ ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase m
     out.touching = true;
     out.overlap = pc.depth;
     out.normal = pc.normal;
-    out.point = pair_point(pa, pb, pc.normal, pc.depth, pc.point);
+    out.point = near_known ? pair_point(va, vb, pc.normal, pc.depth, pc.point)
+                           : pair_point(pa, pb, pc.normal, pc.depth, pc.point);
     out.r_eff = polyhedron_pair_radius(a, b);
     return out;
 }
@@ -394,18 +454,40 @@ Vec3 wall_deepest(const Support& support, const Element& a, const WallShape& w,
 /// carry EPA's tolerance. The polyhedron counts as flat at the contact (as for a sphere), so R* is
 /// the superquadric's, from its principal curvatures at its deepest point. A sphere element (a
 /// clump member) against a polyhedron never comes here (sphere_polyhedron is exact).
-ElementContact polyhedron_superquadric(const Element& p, const Element& s, const Vec3* warm) {
+ElementContact polyhedron_superquadric(const Element& p, const Element& s, const Vec3* warm,
+                                       Vec3* sep) {
     ElementContact out;
     const geometry::PosedPolyhedron pp{p.poly, p.centre, p.q};
     const geometry::PosedSuperquadric ps{s.sq, s.centre, s.q};
     const auto along = [&](const Vec3& n) { return n.dot(ps.support(n)) - n.dot(pp.support(-n)); };
-    // Separating-axis shortcuts: the line of centres and the last normal.
+    // Separating-axis shortcuts: the cached direction, the line of centres, the last normal and
+    // (with a cache) the portal search.
+    const double rsum = p.radius + s.radius;
+    if (cached_apart(pp, ps, rsum, sep)) {
+        out.proved_apart = true;
+        return out;
+    }
     const Vec3 line = p.centre - s.centre;
     if (line.squaredNorm() > 0.0 && along(line.normalized()) < 0.0) {
+        if (sep != nullptr) {
+            *sep = line.normalized();
+        }
         return out;
     }
     if (warm != nullptr && along(*warm) < 0.0) {
+        if (sep != nullptr) {
+            *sep = *warm;
+        }
         return out;
+    }
+    if (sep != nullptr) {
+        Vec3 m;
+        if (geometry::find_separating_direction(pp, ps, kSeparationMargin * rsum, m)) {
+            *sep = m;
+            out.proved_apart = true;
+            return out;
+        }
+        sep->setZero();
     }
     const geometry::ConvexContact cc = geometry::ccd_contact(pp, ps, false);
     out.converged = cc.converged;
@@ -537,7 +619,7 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
 }
 
 ElementContact element_contact(const Element& a, const Element& b, NarrowPhase method,
-                               const Vec3* warm) {
+                               const Vec3* warm, Vec3* separating) {
     // Bounding spheres first: most candidate pairs are apart.
     const double rsum = a.radius + b.radius;
     if ((a.centre - b.centre).squaredNorm() >= rsum * rsum) {
@@ -549,7 +631,7 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
     const bool poly_a = a.kind == Element::Kind::polyhedron;
     const bool poly_b = b.kind == Element::Kind::polyhedron;
     if (poly_a && poly_b) {
-        return polyhedron_pair(a, b, method);
+        return polyhedron_pair(a, b, method, separating);
     }
     if (poly_b && a.kind == Element::Kind::sphere) {
         return sphere_polyhedron(a, b);
@@ -560,11 +642,16 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
         return c;
     }
     if (poly_a) {
-        return polyhedron_superquadric(a, b, warm);
+        return polyhedron_superquadric(a, b, warm, separating);
     }
-    if (poly_b) {
+    if (poly_b) { // the same with the roles swapped: directions from a to b
         const Vec3 back = warm != nullptr ? Vec3(-*warm) : Vec3::Zero();
-        ElementContact c = polyhedron_superquadric(b, a, warm != nullptr ? &back : nullptr);
+        Vec3 sep_back = separating != nullptr ? Vec3(-*separating) : Vec3::Zero();
+        ElementContact c = polyhedron_superquadric(b, a, warm != nullptr ? &back : nullptr,
+                                                   separating != nullptr ? &sep_back : nullptr);
+        if (separating != nullptr) {
+            *separating = -sep_back;
+        }
         c.normal = -c.normal;
         return c;
     }
@@ -575,12 +662,33 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
     // Separating-axis shortcut: the overlap along any direction bounds the MTD from above, so a
     // gap along the line of centres or along the last normal proves the bodies apart (two
     // support evaluations instead of a narrow-phase search).
+    // A cached direction of an earlier step comes first, and with a cache a portal search for a
+    // separating direction runs before the narrow phase (near misses dominate blocky scenes).
+    ElementContact apart;
+    apart.proved_apart = true;
+    if (cached_apart(pa, pb, rsum, separating)) {
+        return apart;
+    }
     const Vec3 line = a.centre - b.centre;
     if (line.squaredNorm() > 0.0 && depth_along(pa, pb, line.normalized()) < 0.0) {
+        if (separating != nullptr) {
+            *separating = line.normalized();
+        }
         return {};
     }
     if (warm != nullptr && depth_along(pa, pb, *warm) < 0.0) {
+        if (separating != nullptr) {
+            *separating = *warm;
+        }
         return {};
+    }
+    if (separating != nullptr) {
+        Vec3 m;
+        if (geometry::find_separating_direction(pa, pb, kSeparationMargin * rsum, m)) {
+            *separating = m;
+            return apart;
+        }
+        separating->setZero();
     }
     geometry::ConvexContact cc;
     ElementContact out;
@@ -622,6 +730,9 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
         cc = geometry::ccd_contact(pa, pb, false);
     }
     out.converged = cc.converged;
+    if (separating != nullptr && cc.converged && cc.depth < 0.0 && method == NarrowPhase::newton) {
+        *separating = cc.normal; // Newton's direction of the largest gap
+    }
     if (!cc.converged || !cc.touching || cc.depth <= 0.0) {
         return out;
     }

@@ -74,6 +74,7 @@ struct ElementContact {
     Vec3 normal = Vec3::UnitX(); ///< unit, from b (or the wall) to a
     Vec3 point = Vec3::Zero();   ///< contact point (m)
     double r_eff = 0.0;          ///< effective radius for the law (m), clamped (see .cpp)
+    bool proved_apart = false;   ///< apart by the cached or searched direction (no narrow phase)
 };
 
 /// Narrow-phase counters of a run (summed over the steps).
@@ -104,8 +105,18 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
 [[nodiscard]] double equivalent_radius(const geometry::ShapeTemplate& t);
 
 /// Contact of two elements; `warm` is the previous normal (b to a) or nullptr.
+///
+/// `separating` (optional, in and out; used by pairs of convex elements, ignored by sphere pairs):
+/// in, a direction (unit, from b to a, world frame) that separated the pair at an earlier step, or
+/// zero; if the gap along it still exceeds a margin (1e-10 of the two bounding radii, far above the
+/// queries' round-off) the pair is apart and no other query runs. Out: a direction along which the
+/// pair is apart this step (not yet checked against the margin), or zero when it touches or none
+/// was found. With it, a superquadric pair also tries a portal search for a separating direction
+/// (geometry/separating_axis.hpp) before its narrow phase. Either way the answer is the one
+/// without it: a direction with a gap proves the pair apart. nullptr: no cache, no search (a pair
+/// that touched at the last step).
 [[nodiscard]] ElementContact element_contact(const Element& a, const Element& b, NarrowPhase method,
-                                             const Vec3* warm);
+                                             const Vec3* warm, Vec3* separating = nullptr);
 
 /// Effective radius (m) of element a against a flat wall of unit normal n (from the wall to a,
 /// world frame): a sphere's radius, a polyhedron's equivalent radius, a superquadric's R* at its

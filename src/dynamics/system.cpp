@@ -227,10 +227,12 @@ void System::index_bodies() {
         }
     }
     if (!has_bodies_) {
+        sep_dirs_.clear();
         return;
     }
     const auto& nb = nl_.partners();
     const auto& owner = nl_.owners();
+    sep_dirs_.assign(nb.size(), Vec3::Zero()); // the entries changed: no cached direction
     for (std::size_t k = 0; k < nb.size(); ++k) {
         if (p_.shape[owner[k]] >= 0 || p_.shape[nb[k]] >= 0) {
             body_entries_.push_back(static_cast<std::uint32_t>(k));

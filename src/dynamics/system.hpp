@@ -166,6 +166,12 @@ class System {
     }
     /// Narrow-phase counters summed over the run (superquadric queries, fallbacks, failures).
     [[nodiscard]] const NarrowPhaseCounters& narrow_phase_counters() const { return np_; }
+    /// Turns the separating-direction cache of convex pairs (and the portal search of superquadric
+    /// near misses) on (the default) or off. The results are the same either way (tests, A/B).
+    void use_separation_cache(bool on) { separation_cache_ = on; }
+    /// Convex pair queries that a cached or searched separating direction answered (no narrow
+    /// phase), since construction or restart (not saved in checkpoints).
+    [[nodiscard]] long separation_skips() const { return separation_skips_; }
 
   private:
     /// Sums of one work unit (a chunk of list entries or wall candidates).
@@ -233,6 +239,13 @@ class System {
     };
     static constexpr std::uint32_t no_element = 0xffffffffU;
     std::vector<MemberPair> member_pairs_;
+    // Per list entry of two single convex elements (polyhedra, superquadrics): a direction (unit,
+    // from b's element to a's, a the particle with the smaller id, world frame) that separated them
+    // at an earlier step, or zero; reset at every list build and restart (element_contact's
+    // `separating`). The answers do not depend on it, only the work does.
+    std::vector<Vec3> sep_dirs_;
+    bool separation_cache_ = true;
+    long separation_skips_ = 0;
     std::vector<Vec3> member_x_build_; // element centres when member_pairs_ was built (m, world)
     bool members_valid_ = false;
     void build_member_pairs();

@@ -481,6 +481,11 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 }
                 const std::uint32_t a0 = element_begin_[a];
                 const std::uint32_t b0 = element_begin_[b];
+                // One convex element on each side (polyhedra, superquadrics): the entry keeps the
+                // direction that separated the pair last (docs/architecture.md, "Separating
+                // directions"); it only saves work, the answer is the same without it.
+                const bool single =
+                    element_begin_[a + 1] - a0 == 1 && element_begin_[b + 1] - b0 == 1;
                 // Elements of b that reach into a's bounding sphere (a clump pair touches with a
                 // few of its members: 12 x 12 candidate pairs become about 2 x 2).
                 near_b.clear();
@@ -522,8 +527,18 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         const Vec3 guess = old != nullptr ? old->normal : Vec3(A.centre - B.centre);
                         const Vec3 warm =
                             guess.squaredNorm() > 0.0 ? Vec3(guess.normalized()) : Vec3::UnitZ();
-                        const ElementContact ec = element_contact(A, B, spec_.narrow_phase, &warm);
+                        Vec3* sep = nullptr;
+                        if (single && separation_cache_) {
+                            sep = &sep_dirs_[k];
+                            if (old != nullptr) { // touching at the last step: no search
+                                sep->setZero();
+                                sep = nullptr;
+                            }
+                        }
+                        const ElementContact ec =
+                            element_contact(A, B, spec_.narrow_phase, &warm, sep);
                         ++np_.calls;
+                        separation_skips_ += ec.proved_apart ? 1 : 0;
                         np_.fallbacks += ec.fell_back ? 1 : 0;
                         np_.failures += ec.converged ? 0 : 1;
                         if (ec.touching) {

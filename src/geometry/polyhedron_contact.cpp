@@ -4,6 +4,7 @@
 
 #include "core/error.hpp"
 #include "geometry/convex_polygon.hpp"
+#include "geometry/separating_axis.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -242,6 +243,17 @@ void add_unique(std::vector<Vec3>& pts, const Vec3& p, double tol2) {
     pts.push_back(p);
 }
 
+/// Depth along the normal m (unit, from B to A, A's body frame) as the patch takes it: the
+/// distance between the deepest vertices of A and B along m (m).
+struct PlaneDepth {
+    double d_a; // min over A's vertices of m . x (m)
+    double d_b; // max over B's vertices of m . x (m)
+};
+
+PlaneDepth plane_depth(const PolyhedronFeatures& fa, const Relative& r, const Vec3& m) {
+    return {min_dot(fa.vertices, m), max_dot(r.vb, m)};
+}
+
 /// Points and patch for the normal m (unit, from B to A), all in A's body frame; the result's
 /// vectors are converted to the world frame of A at the end.
 PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b, const Relative& r,
@@ -250,8 +262,7 @@ PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b,
     const PolyhedronFeatures& fb = *b.shape;
     const double scale = fa.radius + fb.radius;
     PolyhedronContact c;
-    const double d_a = min_dot(fa.vertices, m);
-    const double d_b = max_dot(r.vb, m);
+    const auto [d_a, d_b] = plane_depth(fa, r, m);
     c.depth = d_b - d_a;
     c.touching = c.depth > 0.0;
     const double s = 0.5 * (d_a + d_b);
@@ -334,10 +345,94 @@ PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b,
     return c;
 }
 
+/// The edge-edge stage over the kept edges r.edges_a x r.edges_b (arcs set): raises best (the
+/// largest separation, m) and sets best_m (A's frame, from B to A) and c.feature when an edge pair
+/// spanning a face of the Minkowski difference gives a larger one.
+void edge_stage(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const Relative& r,
+                double& best, Vec3& best_m, PolyhedronContact& c) {
+    for (const int ia : r.edges_a) {
+        const auto& ea = fa.edges[static_cast<std::size_t>(ia)];
+        const Vec3& na0 = fa.face_normals[static_cast<std::size_t>(ea[2])];
+        const Vec3& na1 = fa.face_normals[static_cast<std::size_t>(ea[3])];
+        const Vec3 bxa = na1.cross(na0);
+        const Vec3& pa = fa.vertices[static_cast<std::size_t>(ea[0])];
+        const Vec3 da = fa.vertices[static_cast<std::size_t>(ea[1])] - pa;
+        for (const int ib : r.edges_b) {
+            const auto k = static_cast<std::size_t>(ib);
+            const auto& arc = r.arcs[k];
+            if (!is_minkowski_face(na0, na1, bxa, arc[0], arc[1], arc[2])) {
+                continue;
+            }
+            const auto& eb = fb.edges[k];
+            ++c.iterations;
+            const Vec3& pb = r.vb[static_cast<std::size_t>(eb[0])];
+            const Vec3 db = r.vb[static_cast<std::size_t>(eb[1])] - pb;
+            Vec3 n = da.cross(db);
+            const double len = n.norm();
+            if (len <= 1e-12 * da.norm() * db.norm()) {
+                continue; // parallel edges: covered by the face planes
+            }
+            n /= len;
+            if (n.dot(pa) < 0.0) {
+                n = -n; // outward from A (A's centre is the origin)
+            }
+            const double sep = n.dot(pb - pa);
+            if (sep > best) {
+                best = sep;
+                best_m = -n;
+                c.feature = CommonPlaneFeature::kEdgeEdge;
+            }
+        }
+    }
+}
+
+/// Does one of nv vertices lie strictly inside the other body (all its nf distances beyond the
+/// other body's face planes negative; `dist` vertex-major as in Relative)?
+bool vertex_inside(const std::vector<double>& dist, std::size_t nv, std::size_t nf) {
+    for (std::size_t i = 0; i < nv; ++i) {
+        const double* d = dist.data() + i * nf;
+        if (*std::max_element(d, d + nf) < 0.0) {
+            return true;
+        }
+    }
+    return false;
+}
+
+/// Does a kept edge of one body (vertices `v`, A's frame) cross the other body (face planes n,
+/// o in A's frame), i.e. does a piece of positive length of it lie inside every face plane?
+bool edge_crosses(const std::vector<std::array<int, 4>>& edges, const std::vector<int>& kept,
+                  const std::vector<Vec3>& v, const std::vector<Vec3>& n,
+                  const std::vector<double>& o) {
+    for (const int e : kept) {
+        const Vec3& p0 = v[static_cast<std::size_t>(edges[static_cast<std::size_t>(e)][0])];
+        const Vec3 d = v[static_cast<std::size_t>(edges[static_cast<std::size_t>(e)][1])] - p0;
+        double t0 = 0.0;
+        double t1 = 1.0;
+        for (std::size_t k = 0; k < n.size() && t0 < t1; ++k) {
+            const double den = n[k].dot(d);
+            const double num = o[k] - n[k].dot(p0);
+            if (den == 0.0) {
+                t1 = num < 0.0 ? -1.0 : t1;
+            } else if (den > 0.0) {
+                t1 = std::min(t1, num / den);
+            } else {
+                t0 = std::max(t0, num / den);
+            }
+        }
+        if (t0 < t1) {
+            return true;
+        }
+    }
+    return false;
+}
+
 } // namespace
 
-PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b,
-                                     bool with_patch) {
+namespace {
+
+/// The fast common plane; the patch as `with_patch` says, or (with `need_patch`) as it decides.
+PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& b, bool with_patch,
+                               const PatchTest* need_patch) {
     PolyhedronContact c;
     const PolyhedronFeatures& fa = *a.shape;
     const PolyhedronFeatures& fb = *b.shape;
@@ -408,39 +503,33 @@ PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhe
         keep_edges(fb.edges, r.vb, r.dist_b, nfa, reach, Vec3::Zero(), fa.radius, r.edges_b);
         r.pruned = true;
         relative_arcs(fb, r);
-        for (const int ia : r.edges_a) {
-            const auto& ea = fa.edges[static_cast<std::size_t>(ia)];
-            const Vec3& na0 = fa.face_normals[static_cast<std::size_t>(ea[2])];
-            const Vec3& na1 = fa.face_normals[static_cast<std::size_t>(ea[3])];
-            const Vec3 bxa = na1.cross(na0);
-            const Vec3& pa = fa.vertices[static_cast<std::size_t>(ea[0])];
-            const Vec3 da = fa.vertices[static_cast<std::size_t>(ea[1])] - pa;
-            for (const int ib : r.edges_b) {
-                const auto k = static_cast<std::size_t>(ib);
-                const auto& arc = r.arcs[k];
-                if (!is_minkowski_face(na0, na1, bxa, arc[0], arc[1], arc[2])) {
-                    continue;
-                }
-                const auto& eb = fb.edges[k];
-                ++c.iterations;
-                const Vec3& pb = r.vb[static_cast<std::size_t>(eb[0])];
-                const Vec3 db = r.vb[static_cast<std::size_t>(eb[1])] - pb;
-                Vec3 n = da.cross(db);
-                const double len = n.norm();
-                if (len <= 1e-12 * da.norm() * db.norm()) {
-                    continue; // parallel edges: covered by the face planes
-                }
-                n /= len;
-                if (n.dot(pa) < 0.0) {
-                    n = -n; // outward from A (A's centre is the origin)
-                }
-                const double sep = n.dot(pb - pa);
-                if (sep > best) {
-                    best = sep;
-                    best_m = -n;
-                    c.feature = CommonPlaneFeature::kEdgeEdge;
-                }
+        edge_stage(fa, fb, r, best, best_m, c);
+        // The prune's argument needs overlapping bodies: when they are apart, the separating
+        // edge pair may lie farther apart than D and be dropped, and the search would report a
+        // contact that is not there (found by a random-pose test against
+        // find_separating_direction). So a "touching" answer of a pruned search is kept only
+        // with a certificate of overlap: a vertex of one body inside the other (the face stages'
+        // distances) or a kept edge crossing the other body. Otherwise a separating direction is
+        // searched, and without one the edge stage runs again over every edge pair (the search
+        // before the prune, exact in both cases).
+        const bool pruned_some =
+            r.edges_a.size() < fa.edges.size() || r.edges_b.size() < fb.edges.size();
+        if (best <= 0.0 && pruned_some && !vertex_inside(r.dist_b, nvb, nfa) &&
+            !vertex_inside(r.dist_a, nva, nfb) &&
+            !edge_crosses(fa.edges, r.edges_a, fa.vertices, r.nb, r.ob) &&
+            !edge_crosses(fb.edges, r.edges_b, r.vb, fa.face_normals, fa.face_offsets)) {
+            Vec3 m;
+            if (find_separating_direction(a, b, 1e-12 * (fa.radius + fb.radius), m)) {
+                c.depth = overlap_along(a, b, m);
+                c.normal = m;
+                return c;
             }
+            r.edges_a.resize(fa.edges.size());
+            std::iota(r.edges_a.begin(), r.edges_a.end(), 0);
+            r.edges_b.resize(fb.edges.size());
+            std::iota(r.edges_b.begin(), r.edges_b.end(), 0);
+            relative_arcs(fb, r);
+            edge_stage(fa, fb, r, best, best_m, c);
         }
     }
     if (best > 0.0) {
@@ -455,10 +544,34 @@ PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhe
         c.point = 0.5 * (a.support(-c.normal) + b.support(c.normal));
         return c;
     }
+    if (need_patch != nullptr) {
+        // The depth as the patch would give it (its own vertex loops), so the numbers do not
+        // depend on the decision.
+        const auto [d_a, d_b] = plane_depth(fa, r, best_m);
+        c.depth = d_b - d_a;
+        c.touching = c.depth > 0.0;
+        c.normal = a.q * best_m;
+        c.point = 0.5 * (a.support(-c.normal) + b.support(c.normal));
+        if (!(*need_patch)(c)) {
+            return c;
+        }
+    }
     PolyhedronContact p = patch_in_a(a, b, r, best_m);
     p.feature = c.feature;
     p.iterations = c.iterations;
     return p;
+}
+
+} // namespace
+
+PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b,
+                                     bool with_patch) {
+    return common_plane(a, b, with_patch, nullptr);
+}
+
+PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b,
+                                     const PatchTest& need_patch) {
+    return common_plane(a, b, true, &need_patch);
 }
 
 PolyhedronContact contact_patch_along(const PosedPolyhedron& a, const PosedPolyhedron& b,

@@ -31,6 +31,7 @@
 #include "geometry/polyhedron.hpp"
 
 #include <array>
+#include <functional>
 #include <vector>
 
 namespace kiln::geometry {
@@ -94,6 +95,18 @@ struct PolyhedronContact {
 /// points of A and B along the normal).
 [[nodiscard]] PolyhedronContact
 polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b, bool with_patch = true);
+
+/// Decides, for the plane of a touching pair, whether its points and patch are built (see the
+/// overload below). Its argument has touching, depth, normal and feature as the full result would
+/// have them, and point = midpoint of the deepest points of A and B along the normal.
+using PatchTest = std::function<bool(const PolyhedronContact&)>;
+
+/// As polyhedron_contact with the patch, but the points and the patch are built only when
+/// `need_patch` returns true for the plane found (a caller that reads the patch only for some
+/// configurations, e.g. face on face, saves it for the others). Depth, normal and feature are the
+/// same numbers either way; without the patch, point = midpoint of the deepest points.
+[[nodiscard]] PolyhedronContact
+polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b, const PatchTest& need_patch);
 
 /// Points and patch for a given normal m (unit, from B to A, world frame), as polyhedron_contact
 /// computes them after finding its plane; fills depth (h_A(-m) + h_B(m)), normal, point, points,
