@@ -191,6 +191,8 @@ void System::fold_member_contacts(bool geometry) {
     merged_body_contacts(next_contacts_, &next_groups_, geometry);
     body_contacts_.swap(next_contacts_);
     body_groups_.swap(next_groups_);
+    next_contacts_.clear(); // body_forces() may be filling the next table after this
+    next_groups_.clear();
     members_from_table_ = true;
     view_valid_ = false;
 }
@@ -248,7 +250,9 @@ void System::build_member_pairs() {
 }
 
 void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
-    ++body_eval_;
+    // This evaluation's number; body_eval_ stays that of the last one until the end, so that
+    // fold_member_contacts below still finds last step's member-pair records.
+    const std::int64_t eval = body_eval_ + 1;
     view_valid_ = false;
     next_contacts_.clear();
     next_groups_.clear();
@@ -721,10 +725,10 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         ContactGroup(0, m.k, 0, static_cast<std::uint32_t>(key.ea)), key.eb);
                     shear = old != nullptr ? &old->shear : nullptr;
                     r0 = first_touch && old != nullptr ? old->r_eff : 0.0;
-                } else if (member_seen_[i] == body_eval_ - 1) {
+                } else if (member_seen_[i] == body_eval_) {
                     shear = &member_shear_[i];
                 }
-                member_seen_[i] = body_eval_;
+                member_seen_[i] = eval;
                 queue_spheres(m.a, m.b, member_c_[m.ea], member_c_[m.eb], member_slot | i, shear,
                               r0);
             }
@@ -823,6 +827,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
         spec_.contact.law);
     // The table now holds the contacts other than member pairs; those are in member_shear_.
     members_from_table_ = false;
+    body_eval_ = eval;
     body_contacts_.swap(next_contacts_);
     body_groups_.swap(next_groups_);
 }
