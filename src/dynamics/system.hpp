@@ -162,7 +162,8 @@ class System {
     /// (world frame: points, normals from b to a, overlaps, effective radii, forces on a), each
     /// with its key (ids, elements), in evaluation order (not key order). Built on demand from the
     /// compact member-pair histories and the table of the other contacts (valid until the next
-    /// step, refresh or restore).
+    /// step, refresh or restore; the first read after a step fills a cache, so concurrent calls
+    /// from several threads are not allowed).
     [[nodiscard]] const std::vector<BodyContactEntry>& body_contacts() const;
     /// Narrow-phase counters summed over the run (superquadric queries, fallbacks, failures).
     [[nodiscard]] const NarrowPhaseCounters& narrow_phase_counters() const { return np_; }
