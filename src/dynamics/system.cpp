@@ -896,16 +896,16 @@ void System::collect_contacts(std::vector<ContactRecord>& out) const {
         index[static_cast<std::size_t>(p_.id[i])] = static_cast<std::uint32_t>(i);
     }
     // The table is in evaluation order; records go out in key order, as before the flat table.
-    std::vector<std::uint32_t> by_key(body_contacts_.size());
+    const std::vector<BodyContactEntry>& table = body_contacts();
+    std::vector<std::uint32_t> by_key(table.size());
     for (std::size_t k = 0; k < by_key.size(); ++k) {
         by_key[k] = static_cast<std::uint32_t>(k);
     }
-    std::sort(by_key.begin(), by_key.end(), [&](std::uint32_t l, std::uint32_t r) {
-        return body_contacts_[l].key < body_contacts_[r].key;
-    });
+    std::sort(by_key.begin(), by_key.end(),
+              [&](std::uint32_t l, std::uint32_t r) { return table[l].key < table[r].key; });
     for (const std::uint32_t k : by_key) {
-        const BodyContactKey& key = body_contacts_[k].key;
-        const BodyContact& bc = body_contacts_[k].contact;
+        const BodyContactKey& key = table[k].key;
+        const BodyContact& bc = table[k].contact;
         ContactRecord c;
         c.i = index[static_cast<std::size_t>(key.a)];
         c.wall = key.b < 0;
@@ -960,8 +960,8 @@ SystemState System::save_state() const {
     std::ostringstream os;
     os << rng_;
     s.rng = os.str();
-    s.body_contacts.reserve(body_contacts_.size());
-    for (const BodyContactEntry& e : body_contacts_) {
+    s.body_contacts.reserve(body_contacts().size());
+    for (const BodyContactEntry& e : body_contacts()) {
         s.body_contacts.emplace_back(e.key, e.contact);
     }
     std::sort(s.body_contacts.begin(), s.body_contacts.end(),
@@ -985,6 +985,8 @@ void System::restore_state(SystemState s) {
     for (const auto& [key, contact] : s.body_contacts) {
         body_contacts_.push_back({key, contact});
     }
+    members_from_table_ = true; // the restored table holds every history
+    view_valid_ = false;
     np_ = s.narrow_phase;
     // The list is restored as it was; rebuilding it now would reorder particles and change the
     // summation order. Forces and torques of the last step are part of the store; recomputing them

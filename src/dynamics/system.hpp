@@ -160,10 +160,11 @@ class System {
     [[nodiscard]] bool has_bodies() const { return has_bodies_; }
     /// Element contacts involving a body (and mesh-wall contacts) from the last force evaluation
     /// (world frame: points, normals from b to a, overlaps, effective radii, forces on a), each
-    /// with its key (ids, elements), in evaluation order (not key order).
-    [[nodiscard]] const std::vector<BodyContactEntry>& body_contacts() const {
-        return body_contacts_;
-    }
+    /// with its key (ids, elements), in evaluation order (not key order). Built on demand from the
+    /// compact member-pair histories and the table of the other contacts (valid until the next
+    /// step, refresh or restore; the first read after a step fills a cache, so concurrent calls
+    /// from several threads are not allowed).
+    [[nodiscard]] const std::vector<BodyContactEntry>& body_contacts() const;
     /// Narrow-phase counters summed over the run (superquadric queries, fallbacks, failures).
     [[nodiscard]] const NarrowPhaseCounters& narrow_phase_counters() const { return np_; }
     /// Turns the separating-direction cache of convex pairs (and the portal search of superquadric
@@ -246,6 +247,22 @@ class System {
     std::vector<Vec3> sep_dirs_;
     bool separation_cache_ = true;
     long separation_skips_ = 0;
+    // Compact histories, parallel to member_pairs_ (docs/architecture.md, "Contact records"): the
+    // key of each member pair (ids, element indices in each particle; -1 for a general item), set
+    // at the member build; the shear (m) and force on a (N, world) of its contact at the last
+    // evaluation; and member_seen_, the evaluation (body_eval_) that last found it touching. The
+    // full record of a member-pair contact is built only where it is read (body_contacts(),
+    // checkpoints, re-keying); the table body_contacts_ holds the other element contacts.
+    std::vector<BodyContactKey> member_keys_;
+    std::vector<Vec3> member_shear_, member_force_;
+    std::vector<std::int64_t> member_seen_;
+    std::int64_t body_eval_ = 0; // body_forces() calls so far
+    // True when last evaluation's member-pair histories are in body_contacts_ (at the start, after
+    // a restart, a list rebuild or a member rebuild: fold_member_contacts), false when they are in
+    // member_shear_ (after body_forces()).
+    bool members_from_table_ = true;
+    mutable std::vector<BodyContactEntry> contacts_view_; // body_contacts(), built on demand
+    mutable bool view_valid_ = false;
     std::vector<Vec3> member_x_build_; // element centres when member_pairs_ was built (m, world)
     bool members_valid_ = false;
     void build_member_pairs();
@@ -271,6 +288,13 @@ class System {
     std::vector<BodyContactEntry> body_contacts_, next_contacts_;
     std::vector<ContactGroup> body_groups_, next_groups_;
     void rekey_body_contacts();
+    /// The full records (and their groups when `groups` is given) of the last evaluation in
+    /// evaluation order: the table's merged with the member pairs' (their normal, point and
+    /// overlap derived from the elements only when `geometry`; shear, force and R* always).
+    void merged_body_contacts(std::vector<BodyContactEntry>& out, std::vector<ContactGroup>* groups,
+                              bool geometry) const;
+    /// Moves the member-pair histories into the table (full records, in evaluation order).
+    void fold_member_contacts(bool geometry);
     NarrowPhaseCounters np_;
     // Elements of every particle, this step; only the slots of superquadrics and polyhedra are
     // written (sphere elements live in member_c_ alone).

@@ -7,6 +7,7 @@
 #include "geometry/rotation.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -47,7 +48,10 @@ void System::rotate_bodies(bool drift) {
 void System::rekey_body_contacts() {
     // Groups of the evaluation order of body_forces(): pairs {0, list entry, 0, element of a},
     // plane walls {1, particle, wall, element}, mesh walls {2, mesh wall, particle, element}. A
-    // record whose pair left the list (it cannot be touching) is dropped.
+    // record whose pair left the list (it cannot be touching) is dropped. Member-pair records are
+    // folded into the table first: they are keyed by ids, not by the old list or particle order.
+    fold_member_contacts(true);
+    view_valid_ = false;
     body_groups_.clear();
     if (body_contacts_.empty()) {
         return;
@@ -110,10 +114,95 @@ void System::rekey_body_contacts() {
     body_contacts_.swap(next_contacts_);
 }
 
+const std::vector<BodyContactEntry>& System::body_contacts() const {
+    if (!view_valid_) {
+        merged_body_contacts(contacts_view_, nullptr, true);
+        view_valid_ = true;
+    }
+    return contacts_view_;
+}
+
+void System::merged_body_contacts(std::vector<BodyContactEntry>& out,
+                                  std::vector<ContactGroup>* groups, bool geometry) const {
+    // The records of the table and those of the member pairs touching at the last evaluation,
+    // merged in evaluation order: member pairs are in list order (entry, element of a, element of
+    // b), as the groups of the table, which holds every other contact.
+    out.clear();
+    if (groups != nullptr) {
+        groups->clear();
+    }
+    std::size_t r = 0;
+    const auto emit_table = [&] {
+        out.push_back(body_contacts_[r]);
+        if (groups != nullptr) {
+            groups->push_back(body_groups_[r]);
+        }
+        ++r;
+    };
+    if (!members_from_table_) {
+        for (std::size_t i = 0; i < member_pairs_.size(); ++i) {
+            if (member_seen_[i] != body_eval_) {
+                continue; // not touching at the last evaluation
+            }
+            const MemberPair& m = member_pairs_[i];
+            const BodyContactKey& key = member_keys_[i];
+            const ContactGroup g(0, m.k, 0, static_cast<std::uint32_t>(key.ea));
+            while (r < body_groups_.size() &&
+                   (body_groups_[r] < g ||
+                    (body_groups_[r] == g && body_contacts_[r].key.eb < key.eb))) {
+                emit_table();
+            }
+            // The geometry as the flush of body_forces derives it (same expressions and order).
+            const MemberSphere& A = member_c_[m.ea];
+            const MemberSphere& B = member_c_[m.eb];
+            const double rsum = A.r + B.r;
+            BodyContact c;
+            c.shear = member_shear_[i];
+            c.force = member_force_[i];
+            c.r_eff = A.r * B.r / rsum;
+            if (geometry) {
+                const double d0 = A.x - B.x;
+                const double d1 = A.y - B.y;
+                const double d2 = A.z - B.z;
+                const double dist = std::sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+                const double overlap = rsum - dist;
+                const double inv = 1.0 / dist;
+                const double n[3] = {d0 * inv, d1 * inv, d2 * inv};
+                const double to_point = B.r - 0.5 * overlap;
+                c.normal = Vec3(n[0], n[1], n[2]);
+                c.point = Vec3(B.x + to_point * n[0], B.y + to_point * n[1], B.z + to_point * n[2]);
+                c.overlap = overlap;
+            }
+            out.push_back({key, c});
+            if (groups != nullptr) {
+                groups->push_back(g);
+            }
+        }
+    }
+    while (r < body_groups_.size()) {
+        emit_table();
+    }
+}
+
+void System::fold_member_contacts(bool geometry) {
+    if (members_from_table_) {
+        return;
+    }
+    merged_body_contacts(next_contacts_, &next_groups_, geometry);
+    body_contacts_.swap(next_contacts_);
+    body_groups_.swap(next_groups_);
+    next_contacts_.clear(); // body_forces() may be filling the next table after this
+    next_groups_.clear();
+    members_from_table_ = true;
+    view_valid_ = false;
+}
+
 void System::build_member_pairs() {
     // Elements are posed (body_forces); every body entry becomes its member pairs within a skin, or
-    // one general item when an element of either side is not a sphere.
+    // one general item when an element of either side is not a sphere. The histories of the old
+    // member pairs are in the table when this runs (fold_member_contacts).
     member_pairs_.clear();
+    member_keys_.clear();
     const auto& nb = nl_.partners();
     const auto& owner = nl_.owners();
     const double skin = nl_.skin();
@@ -133,6 +222,7 @@ void System::build_member_pairs() {
         }
         if (!all_spheres(a) || !all_spheres(b)) {
             member_pairs_.push_back({k, a, b, no_element, no_element});
+            member_keys_.push_back({p_.id[a], p_.id[b], -1, -1});
             continue;
         }
         for (std::uint32_t ea = element_begin_[a]; ea < element_begin_[a + 1]; ++ea) {
@@ -142,6 +232,9 @@ void System::build_member_pairs() {
                 const double reach = A.r + B.r + skin;
                 if ((Vec3(A.x, A.y, A.z) - Vec3(B.x, B.y, B.z)).squaredNorm() < reach * reach) {
                     member_pairs_.push_back({k, a, b, ea, eb});
+                    member_keys_.push_back({p_.id[a], p_.id[b],
+                                            static_cast<std::int32_t>(ea - element_begin_[a]),
+                                            static_cast<std::int32_t>(eb - element_begin_[b])});
                 }
             }
         }
@@ -150,10 +243,17 @@ void System::build_member_pairs() {
     for (std::size_t e = 0; e < member_c_.size(); ++e) {
         member_x_build_[e] = Vec3(member_c_[e].x, member_c_[e].y, member_c_[e].z);
     }
+    member_shear_.assign(member_pairs_.size(), Vec3::Zero());
+    member_force_.assign(member_pairs_.size(), Vec3::Zero());
+    member_seen_.assign(member_pairs_.size(), -1);
     members_valid_ = true;
 }
 
 void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
+    // This evaluation's number; body_eval_ stays that of the last one until the end, so that
+    // fold_member_contacts below still finds last step's member-pair records.
+    const std::int64_t eval = body_eval_ + 1;
+    view_valid_ = false;
     next_contacts_.clear();
     next_groups_.clear();
     // Last step's records are met in the order they were stored: `cursor` only moves forward.
@@ -298,6 +398,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // met, so the table keeps its order; its geometry is filled in at the flush.
             constexpr std::size_t block = 16;
             contact::ContactBlock<block> cb;
+            // q_slot: the record's slot in the next table, or member_slot | the member pair's index
+            // (its history goes to member_shear_ and member_force_, no record).
+            constexpr std::uint32_t member_slot = 0x80000000U;
             std::uint32_t q_a[block], q_b[block], q_slot[block];
             bool q_new[block]; // the queued contact is new this step (heat: impact onsets)
             // Raw data of queued sphere pairs (world frame): element centres and radii, body
@@ -372,6 +475,21 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         p_.force[b] -= f;
                         p_.torque[b] += Vec3(cb.tj[0][q], cb.tj[1][q], cb.tj[2][q]) - rb.cross(f);
                     }
+                    if (raw_pairs && (q_slot[q] & member_slot) != 0) { // a member pair
+                        const std::uint32_t i = q_slot[q] & ~member_slot;
+                        member_shear_[i] = Vec3(cb.s[0][q], cb.s[1][q], cb.s[2][q]);
+                        member_force_[i] = f;
+                        if (record_body_onsets_ && q_new[q]) { // heat: impact onset
+                            note_body_onset(
+                                member_keys_[i], Vec3(cb.n[0][q], cb.n[1][q], cb.n[2][q]),
+                                Vec3(g_p[0][q], g_p[1][q], g_p[2][q]),
+                                Vec3(cb.v[0][q], cb.v[1][q], cb.v[2][q]), cb.m_eff[q], cb.r_eff[q]);
+                        }
+                        queue_totals->energy += cb.energy[q];
+                        queue_totals->max_ratio = std::max(queue_totals->max_ratio, q_ratio[q]);
+                        ++queue_totals->contacts;
+                        continue;
+                    }
                     // The record in one pass: sphere pairs fill in their geometry here too (the
                     // law reads but does not change n, overlap, r_eff, v and m_eff).
                     BodyContact& rec = next_contacts_[q_slot[q]].contact;
@@ -432,10 +550,11 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 }
             };
             // Queues the contact of sphere elements A (of a) and B (of b), centres closer than the
-            // sum of their radii (and distinct).
+            // sum of their radii (and distinct), into `slot` (q_slot). `shear`: the last step's
+            // history (nullptr: a new contact); `r0`: R* of the first touch, or 0.
             const auto queue_spheres = [&](std::uint32_t a, std::uint32_t b, const MemberSphere& A,
-                                           const MemberSphere& B, const BodyContactKey& key,
-                                           const ContactGroup& g, const BodyContact* old) {
+                                           const MemberSphere& B, std::uint32_t slot,
+                                           const Vec3* shear, double r0) {
                 const std::size_t q = queued;
                 g_ca[0][q] = A.x;
                 g_ca[1][q] = A.y;
@@ -450,20 +569,19 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     g_vb[c][q] = p_.v[b][c];
                     cb.wi[c][q] = p_.omega[a][c];
                     cb.wj[c][q] = p_.omega[b][c];
-                    cb.s[c][q] = old != nullptr ? old->shear[c] : 0.0;
+                    cb.s[c][q] = shear != nullptr ? (*shear)[c] : 0.0;
                 }
                 g_rada[q] = A.r;
                 g_radb[q] = B.r;
                 g_ma[q] = p_.mass[a];
                 g_mb[q] = p_.mass[b];
-                // R*: with first_touch, that of the contact's first step (the same for spheres)
-                g_r0[q] = first_touch && old != nullptr ? old->r_eff : 0.0;
+                g_r0[q] = r0;
                 g_size[q] = 2.0 * std::min(A.r, B.r); // ratio_size of two sphere elements
-                q_new[q] = old == nullptr;
+                q_new[q] = shear == nullptr;
                 cb.set_pair(q, pairs_.at(p_.material[a], p_.material[b]));
                 q_a[q] = a;
                 q_b[q] = b;
-                q_slot[q] = record(key, g, BodyContact{}, old);
+                q_slot[q] = slot;
                 if (++queued == block) {
                     flush();
                 }
@@ -519,7 +637,12 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         const bool convex = is_convex(A) || is_convex(B);
                         if (!convex) {
                             if (A.centre != B.centre) { // coincident centres: no normal
-                                queue_spheres(a, b, member_c_[ea], member_c_[eb], key, g, old);
+                                // R*: with first_touch, that of the contact's first step (the
+                                // same for spheres)
+                                queue_spheres(a, b, member_c_[ea], member_c_[eb],
+                                              record(key, g, BodyContact{}, old),
+                                              old != nullptr ? &old->shear : nullptr,
+                                              first_touch && old != nullptr ? old->r_eff : 0.0);
                             }
                             continue;
                         }
@@ -569,8 +692,15 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 moved = worst > half_skin2;
             }
             if (moved) {
+                // The histories of the old member pairs go into the table (keyed), where this
+                // step's member pairs find them; only shear and R* are read from them.
+                fold_member_contacts(false);
                 build_member_pairs();
             }
+            // Last step's histories of member pairs: in the table (after a member or list rebuild,
+            // or a restart), else in member_shear_ (member_seen_: the evaluation that last found
+            // the pair touching).
+            const bool from_table = members_from_table_;
             // First pass, without branches: the indices of the member pairs that touch (centres
             // closer than the sum of the radii, and distinct: coincident centres have no normal)
             // and of the general items, in list order. About one member pair in four touches, so
@@ -601,12 +731,21 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     general_entry(m.k, m.a, m.b);
                     continue;
                 }
-                const std::uint32_t ea = m.ea - element_begin_[m.a];
-                const ContactGroup g(0, m.k, 0, ea);
-                const BodyContactKey key{p_.id[m.a], p_.id[m.b], static_cast<std::int32_t>(ea),
-                                         static_cast<std::int32_t>(m.eb - element_begin_[m.b])};
-                queue_spheres(m.a, m.b, member_c_[m.ea], member_c_[m.eb], key, g,
-                              find_old(g, key.eb));
+                const std::uint32_t i = member_hits_[h];
+                const Vec3* shear = nullptr;
+                double r0 = 0.0; // a sphere pair's R* is the same at every step
+                if (from_table) {
+                    const BodyContactKey& key = member_keys_[i];
+                    const BodyContact* old = find_old(
+                        ContactGroup(0, m.k, 0, static_cast<std::uint32_t>(key.ea)), key.eb);
+                    shear = old != nullptr ? &old->shear : nullptr;
+                    r0 = first_touch && old != nullptr ? old->r_eff : 0.0;
+                } else if (member_seen_[i] == body_eval_) {
+                    shear = &member_shear_[i];
+                }
+                member_seen_[i] = eval;
+                queue_spheres(m.a, m.b, member_c_[m.ea], member_c_[m.eb], member_slot | i, shear,
+                              r0);
             }
 
             flush();
@@ -701,6 +840,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             }
         },
         spec_.contact.law);
+    // The table now holds the contacts other than member pairs; those are in member_shear_.
+    members_from_table_ = false;
+    body_eval_ = eval;
     body_contacts_.swap(next_contacts_);
     body_groups_.swap(next_groups_);
 }

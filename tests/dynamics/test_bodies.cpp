@@ -301,6 +301,51 @@ TEST(Bodies, SphereElementRecordsMatchTheElementQueries) {
 }
 
 /// Superballs (m = 2/e = 4) poured into a tube with the given law and body radius rule.
+TEST(Bodies, RecordsBuiltOnDemandCarryTheForceLoopsGeometry) {
+    // Member-pair contacts keep only shear and force between steps; body_contacts() derives their
+    // normal, point and R* from the posed elements when it is read. These must be, bit for bit,
+    // the values the force loop used: the onset of a new contact carries the loop's normal, point
+    // and R*, so every pair onset must find its record with exactly those values.
+    SceneSpec spec = mixed_pour(1);
+    spec.record_contact_onsets = true;
+    System sys(spec);
+    long member_onsets = 0;
+    long pair_onsets = 0;
+    for (int k = 0; k < 30000; ++k) {
+        sys.step();
+        const ParticleStore& p = sys.particles();
+        std::map<std::int64_t, std::size_t> index;
+        for (std::size_t i = 0; i < p.size(); ++i) {
+            index[p.id[i]] = i;
+        }
+        for (const ContactOnset& o : sys.contact_onsets()) {
+            if (o.id_j < 0) {
+                continue; // walls: the table's records, not derived
+            }
+            const int shape_i = p.shape[index.at(o.id_i)];
+            const int shape_j = p.shape[index.at(o.id_j)];
+            if (shape_i < 0 && shape_j < 0) {
+                continue; // two spheres: the sphere kernel's onset, no body contact
+            }
+            const Vec3 point(o.point[0], o.point[1], o.point[2]);
+            const Vec3 normal(-o.normal[0], -o.normal[1], -o.normal[2]); // record: b to a
+            long found = 0;
+            for (const BodyContactEntry& e : sys.body_contacts()) {
+                if (e.key.a == o.id_i && e.key.b == o.id_j && e.contact.point == point) {
+                    ++found;
+                    EXPECT_EQ(e.contact.normal, normal) << "step " << k;
+                    EXPECT_EQ(e.contact.r_eff, o.r_eff) << "step " << k;
+                }
+            }
+            EXPECT_EQ(found, 1) << "step " << k << ", ids " << o.id_i << " " << o.id_j;
+            // Clumps and spheres (shape 0 or none) on both sides: a member pair.
+            ++pair_onsets;
+            member_onsets += shape_i != 1 && shape_j != 1 ? 1 : 0;
+        }
+    }
+    EXPECT_GT(member_onsets, 40) << "pair onsets " << pair_onsets;
+}
+
 SceneSpec superball_pour(const contact::ContactLaw& law, BodyRadius rule) {
     SceneSpec s = base_scene();
     s.contact.law = law;
