@@ -205,6 +205,11 @@ class ThermalSystem {
     /// within radiation_cutoff to data_ (coefficient K, W/K^4), with the linearised conductance 4 K
     /// T^3 in `g_sum` and `worst` for the lag limit. Nothing without emissivities.
     void add_radiation(const dynamics::System& sys, std::vector<double>& g_sum, double& worst);
+    /// Appends the gas-gap conduction and radiation of every heated particle with every wall at a
+    /// temperature within reach (wall_gas, wall_radiation; thermal_walls.cpp) to data_, with
+    /// `g_sum` and `worst` as add_gas_gaps, and takes the walls' view factors from the particles'
+    /// ambient shares. Call after add_radiation (which resets those shares).
+    void add_wall_exchanges(const dynamics::System& sys, std::vector<double>& g_sum, double& worst);
     /// Appends one exchange per pending contact onset (collision conduction) to data_: the
     /// impact heat E of collision_conduction.hpp as the conductance E / (dt_thermal (T_j - T_i))
     /// for this thermal step, so one step moves E exactly; then clears the onsets.
@@ -274,6 +279,8 @@ class ThermalSystem {
     long gas_pairs_ = 0;                // gas-gap pairs
     long radiation_pairs_ = 0;          // radiating pairs
     long collisions_ = 0;               // impacts that exchanged heat (collision conduction)
+    long wall_gas_gaps_ = 0;            // particle-wall gas-gap exchanges
+    long wall_radiation_ = 0;           // particle-wall radiative exchanges
     std::vector<PendingImpact> onsets_; // taken from the System, not yet exchanged
     std::vector<std::int64_t> index_;   // particle index by id (after_step's scratch)
     bool warned_lag_ = false;
