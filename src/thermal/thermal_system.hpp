@@ -201,6 +201,11 @@ class ThermalSystem {
     /// area-equivalent (true) sphere radius.
     [[nodiscard]] double equivalent_radius(const dynamics::System& sys, std::size_t k,
                                            bool by_area) const;
+    /// Takes `share` (-) of a particle's whole view from its ambient share (record r): a lumped
+    /// particle's share drops by it; a resolved particle's faces in `patches` (those exchanging
+    /// with the partner) drop uniformly, by share * (total area) / (area of `patches`). Clamping
+    /// at 0 is the caller's.
+    void take_ambient_view(const Record& r, const std::vector<int>& patches, double share);
     /// Appends the radiative exchange of every pair of heated particles with emissivities > 0
     /// within radiation_cutoff to data_ (coefficient K, W/K^4), with the linearised conductance 4 K
     /// T^3 in `g_sum` and `worst` for the lag limit. Nothing without emissivities.
@@ -255,8 +260,10 @@ class ThermalSystem {
     std::vector<double> lumped_emissivity_; // emissivity of each lumped slot (-)
     // Share of each particle's view that goes to the ambient (radiation_temperature): 1 minus the
     // view factors (A F)_ij / A_i of its radiating neighbours this thermal step, >= 0 (-).
-    std::vector<double> lumped_view_;    // per lumped slot
-    std::vector<double> pool_view_;      // per pool slot
+    std::vector<double> lumped_view_; // per lumped slot
+    // Resolved particles: per boundary face (face_rate_'s layout), the neighbours' view spread
+    // over the faces that see them (take_ambient_view).
+    std::vector<double> face_view_;
     std::vector<std::int64_t> slot_ids_; // id of each record created, in creation order
     std::vector<dynamics::ContactRecord> contacts_;
     std::vector<ContactData> data_;

@@ -183,9 +183,9 @@ void ThermalSystem::add_wall_exchanges(const dynamics::System& sys, std::vector<
                 // the bounding radius of the axis through the nearest point.
                 d.patches_a = gap_patches(sys, rec, i, nearest->point, towards, r_bound);
             }
-            // What the particle sees of the wall it does not see of the ambient.
-            (rec.templ < 0 ? lumped_view_[static_cast<std::size_t>(rec.slot)]
-                           : pool_view_[static_cast<std::size_t>(rec.slot)]) -= plane_view_factor;
+            // What the particle sees of the wall it does not see of the ambient (resolved: on
+            // the faces that exchange with the wall).
+            take_ambient_view(rec, d.patches_a, plane_view_factor);
             const double g = heat::radiative_conductance_bound(
                 d.conductance, contact_temperature(rec, d, false), pl.temperature);
             g_sum[i] += g;
@@ -199,7 +199,7 @@ void ThermalSystem::add_wall_exchanges(const dynamics::System& sys, std::vector<
     for (double& v : lumped_view_) {
         v = std::max(0.0, v);
     }
-    for (double& v : pool_view_) {
+    for (double& v : face_view_) {
         v = std::max(0.0, v);
     }
 }

@@ -13,6 +13,7 @@
 #include "heat/radiation.hpp"
 #include "thermal/thermal_system.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <gtest/gtest.h>
@@ -324,6 +325,45 @@ TEST(WallGaps, ABlackSphereNextToAWallAtTheAmbientLosesWhatItLosesAlone) {
                 alone);
     EXPECT_GT(alone, 0.0);
     EXPECT_NEAR(with, alone, 1e-4 * alone); // 1 ms step: the lag of T^4 over it
+}
+
+TEST(WallGaps, ResolvedBlackSphereByABlackWallAtTheAmbientCoolsEvenly) {
+    // A black sphere at 600 K beside a black wall at the ambient's temperature sits in an
+    // isothermal black enclosure: every face should lose as much as when alone. The wall's view
+    // comes off the ambient share of the faces that exchange with the wall, so the pole facing
+    // the wall and the far pole cool alike. (Taken evenly off the whole surface, as before, the
+    // near pole would lose 1/2 + 1 and the far pole 1/2 of sigma (T^4 - T_a^4) per area: 3:1 by
+    // that arithmetic.)
+    const auto run = [](bool wall) {
+        const dynamics::SceneSpec s = near_floor(WallKind::plane, 0.1 * radius);
+        HeatSpec h = radiating(s, heat::HeatModel::resolved, 1.0, 1.0);
+        h.materials[0].conductivity = 200.0; // thermally thin (Bi ~ 3e-3)
+        h.wall_radiation = wall;
+        h.materials[0].initial_temperature = 600.0;
+        h.wall_temperature = {t_particle};
+        h.radiation_temperature = t_particle;
+        dynamics::System sys(s);
+        ThermalSystem heat(h, sys);
+        const double e0 = heat.thermal_energy();
+        heat.thermal_step(sys);
+        const std::vector<FieldView> f = heat.fields(sys, {});
+        std::size_t low = 0; // the cells nearest the two poles
+        std::size_t high = 0;
+        for (std::size_t c = 0; c < f[0].field.size(); ++c) {
+            low = f[0].grid->node[c].z() < f[0].grid->node[low].z() ? c : low;
+            high = f[0].grid->node[c].z() > f[0].grid->node[high].z() ? c : high;
+        }
+        return std::array<double, 3>{e0 - heat.thermal_energy(), 600.0 - f[0].field[low],
+                                     600.0 - f[0].field[high]};
+    };
+    const auto [with, near, far] = run(true);
+    const auto [alone, near_alone, far_alone] = run(false);
+    std::printf("resolved black sphere: loses %.9e J by the wall (%.9e J alone); pole drop %.6e K "
+                "near, %.6e K far (alone %.6e, %.6e)\n",
+                with, alone, near, far, near_alone, far_alone);
+    EXPECT_NEAR(with, alone, 1e-3 * alone); // node vs surface temperature, ~Bi of the wall part
+    // Node (exchange) against surface (ambient) temperature, O(Bi) of the wall part: 1e-3.
+    EXPECT_NEAR(near, far, 1e-3 * far);
 }
 
 // ---- Enclosures and balance --------------------------------------------------------------------
