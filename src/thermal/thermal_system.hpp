@@ -197,6 +197,11 @@ class ThermalSystem {
     [[nodiscard]] std::vector<int> gap_patches(const dynamics::System& sys, const Record& r,
                                                std::size_t k, const Vec3& point, const Vec3& n,
                                                double radius) const;
+    /// Radius (m) of particle index k in the gas-gap formula at the world point `point` on its
+    /// surface (m): a superquadric's local radius of curvature 1 / sqrt(k1 k2) there (floored as
+    /// the contact laws do), otherwise equivalent_radius(sys, k, false).
+    [[nodiscard]] double gas_gap_radius(const dynamics::System& sys, std::size_t k,
+                                        const Vec3& point) const;
     /// Radius of particle index k (m): a sphere's own; a body's volume- (by_area false) or
     /// area-equivalent (true) sphere radius.
     [[nodiscard]] double equivalent_radius(const dynamics::System& sys, std::size_t k,

@@ -65,11 +65,10 @@ void ThermalSystem::add_wall_exchanges(const dynamics::System& sys, std::vector<
         if (!gas && !radiates) {
             continue;
         }
-        // Radii: the bounding radius bounds every element's distance from the centre; the
-        // volume-equivalent radius is the gas gap's (convex bodies), the area-equivalent one
-        // the radiation's (as for body pairs).
+        // Radii: the bounding radius bounds every element's distance from the centre and every
+        // gas-gap radius (gas_gap_radius); the area-equivalent radius is the radiation's (as for
+        // body pairs).
         const double r_bound = p.radius[i];
-        const double r_vol = equivalent_radius(sys, i, false);
         const double r_area = equivalent_radius(sys, i, true);
         const double reach =
             std::max(gas ? spec_.gas.cutoff * r_bound : 0.0,
@@ -129,10 +128,11 @@ void ThermalSystem::add_wall_exchanges(const dynamics::System& sys, std::vector<
                 // mid-plane is the wall surface at T_w: twice the pair conductance of two equal
                 // spheres 2 (R + gap) apart, whose half gap H_g is the wall gap (so the pair's
                 // cut-off H_g / R applies to gap / R). Sphere elements by their radius, convex
-                // bodies by their volume-equivalent sphere touching at gap 0 when they overlap.
+                // bodies by gas_gap_radius at their nearest point (a superquadric's local radius
+                // of curvature, a polyhedron's volume-equivalent sphere), gap 0 when overlapping.
                 for (const PlaneGap& e : gaps) {
                     const bool sphere = e.member_radius > 0.0;
-                    const double r = sphere ? e.member_radius : r_vol;
+                    const double r = sphere ? e.member_radius : gas_gap_radius(sys, i, e.point);
                     const double gap = sphere ? e.gap : std::max(0.0, e.gap);
                     if (!(gap > -r) || gap > spec_.gas.cutoff * r) {
                         continue; // centre behind the wall, or beyond the cut-off

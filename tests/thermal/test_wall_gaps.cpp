@@ -237,6 +237,25 @@ TEST(WallGaps, BodiesUseTheirGapAndEquivalentRadius) {
         EXPECT_NEAR(moved, expected, 1e-9 * expected); // the support point's rounding
     }
     {
+        // An ellipsoid standing on its tip (half-axis c along z): the local radius of curvature
+        // there, a b / c (principal curvatures c / a^2, c / b^2), not the volume-equivalent one.
+        geometry::Superquadric q;
+        q.half_axes = Vec3(1.2e-3, 1.5e-3, 2e-3);
+        const dynamics::SceneSpec s = near_floor(WallKind::plane, 0.1 * 0.9e-3, 0,
+                                                 {geometry::make_template("ellipsoid", q)}, 2e-3);
+        const HeatSpec h = heat_of(s, heat::HeatModel::lumped);
+        const double r = 1.2e-3 * 1.5e-3 / 2e-3;
+        const double expected = h.step_multiple * s.time_step * 2.0 *
+                                heat::gas_gap_conductance(r, r, 2.0 * (r + 0.1 * 0.9e-3), k_solid,
+                                                          k_solid, {k_gas, porosity}) *
+                                (t_wall - t_particle);
+        const double moved = one_step_heat(s, h);
+        std::printf("ellipsoid tip: %.10e J (expected %.10e J)\n", moved, expected);
+        // The principal curvatures from the implicit function's derivatives at the tip, and the
+        // gap from the support point: both to rounding.
+        EXPECT_NEAR(moved, expected, 1e-9 * expected);
+    }
+    {
         const double rm = 2e-3;
         const geometry::ShapeTemplate t = geometry::make_template(
             "dumbbell", geometry::make_clump(
