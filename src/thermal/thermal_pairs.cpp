@@ -142,7 +142,7 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
         const double apart = std::max(s, r[np.i] + r[np.j]);
         d.conductance =
             heat::radiative_coefficient(r[np.i], r[np.j], apart, emissivity(d.a), emissivity(d.b));
-        // What each sees of the partner, it does not see of the ambient (sum of view factors 1).
+        // The pair's view area (A F)_ij, for the ambient shares below.
         const double af = heat::pair_view_area(r[np.i], r[np.j], apart);
         const Vec3 n = between / s;
         // Resolved spheres exchange over the hemisphere facing the partner (world axes = body
@@ -155,8 +155,8 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
             d.patches_b = heat::contact_patches(
                 *templates_[static_cast<std::size_t>(d.b.templ)]->grid, -r[np.j] * n, -n, r[np.j]);
         }
-        // What each sees of the partner, it does not see of the ambient (resolved: on the faces
-        // that exchange with it).
+        // What each sees of the partner, it does not see of the ambient (sum of view factors 1;
+        // resolved: on the faces that exchange with it).
         take_ambient_view(d.a, d.patches_a, af / sphere_area(r[np.i]));
         take_ambient_view(d.b, d.patches_b, af / sphere_area(r[np.j]));
         // Lag limit with the linearised conductance at the hotter side's current temperature.
