@@ -499,6 +499,12 @@ void read_heat(Section& root, CaseSpec& c, const toml::table& doc) {
     if (s.has("radiation_temperature")) {
         h.radiation_temperature = s.real("radiation_temperature", std::nullopt, positive(), "K");
     }
+    h.wall_gas = s.boolean("wall_gas_gap", false);
+    if (h.wall_gas && !(h.gas.conductivity > 0.0)) {
+        s.fail_at("wall_gas_gap", "conducts through the gas between particles and hot walls: "
+                                  "set gas_conductivity > 0 (allowed with 0: false)");
+    }
+    h.wall_radiation = s.boolean("wall_radiation", false);
     h.collision_conduction = s.boolean("collision_conduction", false);
     c.scene.record_contact_onsets = h.collision_conduction; // the force loop records impacts
     h.sphere_rotation = s.boolean("sphere_rotation", true);

@@ -263,6 +263,27 @@ std::vector<BodyGap> element_gaps(const dynamics::System& sys, std::size_t i, st
     return out;
 }
 
+std::vector<PlaneGap> plane_gaps(const dynamics::System& sys, std::size_t i, const Vec3& point,
+                                 const Vec3& normal) {
+    std::vector<Core> cores;
+    std::vector<double> margins;
+    cores_of(sys, i, cores, margins);
+    std::vector<PlaneGap> out(cores.size());
+    for (std::size_t a = 0; a < cores.size(); ++a) {
+        PlaneGap& g = out[a];
+        if (is_convex(cores[a])) {
+            // The support along -n is the body's point nearest the plane (a convex body).
+            g.point = cores[a].support(-normal);
+            g.gap = (g.point - point).dot(normal);
+        } else {
+            g.member_radius = margins[a];
+            g.point = cores[a].x - margins[a] * normal;
+            g.gap = (cores[a].x - point).dot(normal) - margins[a];
+        }
+    }
+    return out;
+}
+
 BodyGap body_gap(const dynamics::System& sys, std::size_t i, std::size_t j) {
     const std::vector<BodyGap> all = element_gaps(sys, i, j);
     return *std::min_element(all.begin(), all.end(), [](const BodyGap& x, const BodyGap& y) {

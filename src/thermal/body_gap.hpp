@@ -44,6 +44,20 @@ struct BodyGap {
 /// support along it lies. The GJK distance is accurate to 1e-9 times the larger bounding radius.
 [[nodiscard]] BodyGap body_gap(const dynamics::System& sys, std::size_t i, std::size_t j);
 
+/// The gap of one element (core) of a particle to a plane (a wall or a wall's tangent plane).
+struct PlaneGap {
+    double gap = 0; ///< distance of the element's surface from the plane (m); < 0 =
+                    ///< overlap (depth of a sphere element, or of a convex body's support)
+    Vec3 point = Vec3::Zero(); ///< the element's point nearest the plane (m, world)
+    double member_radius = 0;  ///< radius of a sphere element (m); 0 for a convex body
+};
+
+/// Gap of every element of particle index `i` of `sys` to the plane through `point` (m, world)
+/// with unit normal `normal` (world, pointing to the particle's side): one for a sphere or a convex
+/// body (its support point along -normal, exact), one per member for a clump; in element order.
+[[nodiscard]] std::vector<PlaneGap> plane_gaps(const dynamics::System& sys, std::size_t i,
+                                               const Vec3& point, const Vec3& normal);
+
 /// A convex core placed in the world: a point (sphere centre, clump member centre) or a convex
 /// body with a support map (superquadric, polyhedron).
 struct Core {

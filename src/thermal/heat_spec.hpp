@@ -71,6 +71,14 @@ struct HeatSpec {
     double radiation_temperature = std::numeric_limits<double>::quiet_NaN();
     /// Largest H/R (H half the surface gap) at which neighbouring spheres exchange radiation (-).
     double radiation_cutoff = 0.5;
+    /// Gas-gap conduction between heated particles and walls (plane, cylinder, mesh) at a
+    /// temperature: Cheng et al.'s tubes between the particle and its mirror image in the wall,
+    /// while gap / R <= gas.cutoff. Needs gas.conductivity > 0.
+    bool wall_gas = false;
+    /// Radiation between heated particles with an emissivity and walls at a temperature whose
+    /// material has an emissivity: view factor 1/2 (a sphere to the plane it faces) while
+    /// gap / R <= radiation_cutoff.
+    bool wall_radiation = false;
     std::vector<MaterialHeat> materials; ///< one per material of the scene, same order
     /// Temperature of each wall of the scene (K); NaN = adiabatic (no contact conduction).
     std::vector<double> wall_temperature;

@@ -8,6 +8,7 @@
 #include "thermal/body_gap.hpp"
 #include "thermal/body_shapes.hpp"
 
+#include "geometry/superquadric.hpp"
 #include "heat/contact_conduction.hpp"
 #include "heat/gas_conduction.hpp"
 #include "heat/radiation.hpp"
@@ -16,10 +17,19 @@
 #include <cmath>
 #include <numbers>
 #include <utility>
+#include <variant>
 
 namespace kiln::thermal {
 
 using namespace detail;
+
+namespace {
+
+/// Smallest local radius of a superquadric in the gas gap, as a fraction of its smallest
+/// half-axis: the contact laws' floor at a tip (kRadiusFloor in dynamics/body_contact.cpp).
+constexpr double tip_radius_floor = 0.05;
+
+} // namespace
 
 std::vector<int> ThermalSystem::gap_patches(const dynamics::System& sys, const Record& r,
                                             std::size_t k, const Vec3& point, const Vec3& n,
@@ -47,6 +57,25 @@ double ThermalSystem::equivalent_radius(const dynamics::System& sys, std::size_t
                    : std::cbrt(3.0 * volume / (4.0 * std::numbers::pi));
 }
 
+double ThermalSystem::gas_gap_radius(const dynamics::System& sys, std::size_t k,
+                                     const Vec3& point) const {
+    const geometry::ShapeTemplate* t = shape_of(sys, k);
+    const auto* sq = t != nullptr ? std::get_if<geometry::Superquadric>(&t->shape) : nullptr;
+    if (sq == nullptr) {
+        return equivalent_radius(sys, k, false);
+    }
+    // The contact laws' rule (dynamics/body_contact.cpp, effective_radius): principal curvatures
+    // at the point, each raised to at least 1 / (bounding radius) (a flat face counts as curved
+    // like the body's bounding sphere), R = 1 / sqrt(k1 k2), at least 5 % of the smallest
+    // half-axis (a tip).
+    const ParticleStore& p = sys.particles();
+    const auto kp = sq->principal_curvatures(p.q[k].conjugate() * (point - p.x[k]));
+    const double k_min = 1.0 / p.radius[k];
+    const double floor = tip_radius_floor * sq->half_axes.minCoeff();
+    const double r = 1.0 / std::sqrt(std::max(kp[0], k_min) * std::max(kp[1], k_min));
+    return std::isfinite(r) ? std::max(r, floor) : floor;
+}
+
 void ThermalSystem::body_gas_gaps(const dynamics::System& sys, std::size_t i, std::size_t j,
                                   const ContactData& base, std::vector<ContactData>& out) const {
     out.clear();
@@ -56,12 +85,13 @@ void ThermalSystem::body_gas_gaps(const dynamics::System& sys, std::size_t i, st
     // exchange through each member pair within the cut-off.
     for (const BodyGap& g : element_gaps(sys, i, j)) {
         // The radius of each side in the Cheng et al. formula: a sphere's own; a clump member's
-        // (its exact local shape); a superquadric's or polyhedron's volume-equivalent sphere (an
-        // approximation: a flat face has no finite local radius).
+        // (its exact local shape); a superquadric's local radius of curvature at the nearest
+        // point; a polyhedron's volume-equivalent sphere (an approximation: a flat face has no
+        // finite local radius).
         const double r_i =
-            g.member_radius_i > 0.0 ? g.member_radius_i : equivalent_radius(sys, i, false);
+            g.member_radius_i > 0.0 ? g.member_radius_i : gas_gap_radius(sys, i, g.point_i);
         const double r_j =
-            g.member_radius_j > 0.0 ? g.member_radius_j : equivalent_radius(sys, j, false);
+            g.member_radius_j > 0.0 ? g.member_radius_j : gas_gap_radius(sys, j, g.point_j);
         const double s = r_i + r_j + g.gap; // centre distance of the two equivalent spheres
         const double reach = 2.0 * spec_.gas.cutoff * (2.0 * r_i * r_j) / (r_i + r_j);
         if (!(s > std::abs(r_i - r_j)) || g.gap > reach) {

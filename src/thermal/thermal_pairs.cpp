@@ -97,7 +97,7 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
     };
     // Ambient view shares: the whole surface unless neighbours take part of it (below).
     lumped_view_.assign(lumped_.size(), 1.0);
-    pool_view_.assign(static_cast<std::size_t>(pool_.size()), 1.0);
+    face_view_.assign(face_rate_.size(), 1.0);
     // Heated particles with an emissivity (others radius 0: left out of the search); bodies by
     // the larger of their bounding radius and area-equivalent radius (body_radiation's radius).
     std::vector<double> r(p.size(), 0.0);
@@ -113,10 +113,6 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
     if (!any) {
         return;
     }
-    const auto ambient_view = [&](const Record& rec) -> double& {
-        return rec.templ < 0 ? lumped_view_[static_cast<std::size_t>(rec.slot)]
-                             : pool_view_[static_cast<std::size_t>(rec.slot)];
-    };
     long pairs = 0;
     for (const heat::NearPair& np : heat::near_sphere_pairs(p.x, r, spec_.radiation_cutoff)) {
         ContactData d;
@@ -131,8 +127,8 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
                                 area_j)) {
                 continue;
             }
-            ambient_view(d.a) -= af / area_i;
-            ambient_view(d.b) -= af / area_j;
+            take_ambient_view(d.a, d.patches_a, af / area_i);
+            take_ambient_view(d.b, d.patches_b, af / area_j);
             const double g =
                 heat::radiative_conductance_bound(d.conductance, contact_temperature(d.a, d, false),
                                                   contact_temperature(d.b, d, true));
@@ -150,15 +146,17 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
         const double apart = std::max(s, r[np.i] + r[np.j]);
         d.conductance =
             heat::radiative_coefficient(r[np.i], r[np.j], apart, emissivity(d.a), emissivity(d.b));
-        // What each sees of the partner, it does not see of the ambient (sum of view factors 1).
+        // The pair's view area (A F)_ij, for the ambient shares below.
         const double af = heat::pair_view_area(r[np.i], r[np.j], apart);
-        ambient_view(d.a) -= af / sphere_area(r[np.i]);
-        ambient_view(d.b) -= af / sphere_area(r[np.j]);
         // Resolved spheres exchange over the hemisphere facing the partner (in each sphere's
         // grid frame): its area-weighted cell temperature, and the heat spread over it.
         const Vec3 n = between / s;
         sphere_patches(p, np.i, d.a, n, r[np.i], d.patches_a);
         sphere_patches(p, np.j, d.b, -n, r[np.j], d.patches_b);
+        // What each sees of the partner, it does not see of the ambient (sum of view factors 1;
+        // resolved: on the faces that exchange with it).
+        take_ambient_view(d.a, d.patches_a, af / sphere_area(r[np.i]));
+        take_ambient_view(d.b, d.patches_b, af / sphere_area(r[np.j]));
         // Lag limit with the linearised conductance at the hotter side's current temperature.
         const double g = heat::radiative_conductance_bound(
             d.conductance, contact_temperature(d.a, d, false), contact_temperature(d.b, d, true));
@@ -173,8 +171,41 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
     for (double& v : lumped_view_) {
         v = std::max(0.0, v); // a crowded bed (the centre estimate of F is low, so rare)
     }
-    for (double& v : pool_view_) {
+    for (double& v : face_view_) {
         v = std::max(0.0, v);
+    }
+}
+
+void ThermalSystem::take_ambient_view(const Record& r, const std::vector<int>& patches,
+                                      double share) {
+    if (r.templ < 0) {
+        lumped_view_[static_cast<std::size_t>(r.slot)] -= share;
+        return;
+    }
+    // Resolved: the faces that exchange with the partner give up their ambient view, uniformly
+    // by area, so that their area sum is share * (total area), the same total as a uniform
+    // reduction. A black face then loses to partner and ambient together what it would lose to
+    // an ambient at the partner's temperature: the exchange is spread over the same faces by area.
+    const std::vector<heat::BoundaryFace>& faces =
+        templates_[static_cast<std::size_t>(r.templ)]->grid->boundary;
+    double* view = face_view_.data() + face_offset_[static_cast<std::size_t>(r.slot)];
+    double area = 0.0;
+    for (const heat::BoundaryFace& f : faces) {
+        area += f.area;
+    }
+    double facing = 0.0;
+    for (const int b : patches) {
+        facing += faces[static_cast<std::size_t>(b)].area;
+    }
+    if (!(facing > 0.0)) {
+        for (double* v = view; v != view + faces.size(); ++v) {
+            *v -= share; // no patch area (not expected): the whole surface, as a lumped particle
+        }
+        return;
+    }
+    const double drop = share * area / facing;
+    for (const int b : patches) {
+        view[b] -= drop;
     }
 }
 

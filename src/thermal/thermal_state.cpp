@@ -256,6 +256,8 @@ std::string ThermalSystem::summary_json() const {
     j += fmt::format("    \"conducting_contacts\": {},\n", k.contacts);
     j += fmt::format("    \"gas_gap_pairs\": {},\n", gas_pairs_);
     j += fmt::format("    \"radiation_pairs\": {},\n", radiation_pairs_);
+    j += fmt::format("    \"wall_gas_gaps\": {},\n", wall_gas_gaps_);
+    j += fmt::format("    \"wall_radiation\": {},\n", wall_radiation_);
     j += fmt::format("    \"collisions\": {},\n", collisions_);
     j += fmt::format("    \"thermal_energy\": {},\n", num(thermal_energy()));
     j += fmt::format("    \"external_heat\": {}\n", num(external_heat_));

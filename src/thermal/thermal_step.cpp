@@ -114,6 +114,7 @@ void ThermalSystem::thermal_step(const dynamics::System& sys) {
     add_contacts(sys, g_sum, worst);
     add_gas_gaps(sys, g_sum, worst);
     add_radiation(sys, g_sum, worst);
+    add_wall_exchanges(sys, g_sum, worst);
     add_collisions(sys, g_sum, worst);
     for (std::size_t i = 0; i < p.size(); ++i) {
         if (g_sum[i] > 0.0) {

@@ -27,15 +27,21 @@ void ThermalSystem::prepare_surface(const dynamics::System& sys, double& worst) 
         for (int slot = 0; slot < pool_.size(); ++slot) {
             const Template& t = *templates_[static_cast<std::size_t>(
                 pool_template_[static_cast<std::size_t>(slot)])];
-            // Emissivity times the share of the view that reaches the ambient.
-            const double eps = spec_.materials[static_cast<std::size_t>(t.material)].emissivity *
-                               pool_view_[static_cast<std::size_t>(slot)];
-            if (!(eps > 0.0)) {
+            // Emissivity times each face's share of the view that reaches the ambient.
+            const double e = spec_.materials[static_cast<std::size_t>(t.material)].emissivity;
+            const double* view = face_view_.data() + face_offset_[static_cast<std::size_t>(slot)];
+            const std::size_t nb = t.grid->boundary.size();
+            if (!(e > 0.0) || std::none_of(view, view + nb, [](double v) { return v > 0.0; })) {
                 continue;
             }
             radiating_[static_cast<std::size_t>(slot)] = 1;
             const std::span<const double> f = pool_.field(slot);
-            for (const heat::BoundaryFace& face : t.grid->boundary) {
+            for (std::size_t b = 0; b < nb; ++b) {
+                const heat::BoundaryFace& face = t.grid->boundary[b];
+                const double eps = e * view[b];
+                if (!(eps > 0.0)) {
+                    continue;
+                }
                 const auto cell = static_cast<std::size_t>(face.cell);
                 const double tm = std::max(f[cell], t_rad);
                 const double hr = 4.0 * eps * heat::stefan_boltzmann * tm * tm * tm;
@@ -132,12 +138,17 @@ void ThermalSystem::add_surface_rates() {
         }
         const Template& t =
             *templates_[static_cast<std::size_t>(pool_template_[static_cast<std::size_t>(slot)])];
-        const double eps = spec_.materials[static_cast<std::size_t>(t.material)].emissivity *
-                           pool_view_[static_cast<std::size_t>(slot)];
+        const double e = spec_.materials[static_cast<std::size_t>(t.material)].emissivity;
         const std::size_t off = face_offset_[static_cast<std::size_t>(slot)];
         const std::span<const double> f = pool_.field(slot);
         for (std::size_t b = 0; b < t.grid->boundary.size(); ++b) {
             const heat::BoundaryFace& face = t.grid->boundary[b];
+            // This face's emissivity times its share of the view that reaches the ambient.
+            const double eps = e * face_view_[off + b];
+            if (!(eps > 0.0)) {
+                rad_rate_[off + b] = 0.0; // the neighbours fill its whole view
+                continue;
+            }
             const double ts = heat::radiating_surface_temperature(
                 f[static_cast<std::size_t>(face.cell)], face.distance, t.props.conductivity, eps,
                 t_rad);

@@ -214,14 +214,29 @@ class ThermalSystem {
     [[nodiscard]] std::vector<int> gap_patches(const dynamics::System& sys, const Record& r,
                                                std::size_t k, const Vec3& point, const Vec3& n,
                                                double radius) const;
+    /// Radius (m) of particle index k in the gas-gap formula at the world point `point` on its
+    /// surface (m): a superquadric's local radius of curvature 1 / sqrt(k1 k2) there (floored as
+    /// the contact laws do), otherwise equivalent_radius(sys, k, false).
+    [[nodiscard]] double gas_gap_radius(const dynamics::System& sys, std::size_t k,
+                                        const Vec3& point) const;
     /// Radius of particle index k (m): a sphere's own; a body's volume- (by_area false) or
     /// area-equivalent (true) sphere radius.
     [[nodiscard]] double equivalent_radius(const dynamics::System& sys, std::size_t k,
                                            bool by_area) const;
+    /// Takes `share` (-) of a particle's whole view from its ambient share (record r): a lumped
+    /// particle's share drops by it; a resolved particle's faces in `patches` (those exchanging
+    /// with the partner) drop uniformly, by share * (total area) / (area of `patches`). Clamping
+    /// at 0 is the caller's.
+    void take_ambient_view(const Record& r, const std::vector<int>& patches, double share);
     /// Appends the radiative exchange of every pair of heated particles with emissivities > 0
     /// within radiation_cutoff to data_ (coefficient K, W/K^4), with the linearised conductance 4 K
     /// T^3 in `g_sum` and `worst` for the lag limit. Nothing without emissivities.
     void add_radiation(const dynamics::System& sys, std::vector<double>& g_sum, double& worst);
+    /// Appends the gas-gap conduction and radiation of every heated particle with every wall at a
+    /// temperature within reach (wall_gas, wall_radiation; thermal_walls.cpp) to data_, with
+    /// `g_sum` and `worst` as add_gas_gaps, and takes the walls' view factors from the particles'
+    /// ambient shares. Call after add_radiation (which resets those shares).
+    void add_wall_exchanges(const dynamics::System& sys, std::vector<double>& g_sum, double& worst);
     /// Appends one exchange per pending contact onset (collision conduction) to data_: the
     /// impact heat E of collision_conduction.hpp as the conductance E / (dt_thermal (T_j - T_i))
     /// for this thermal step, so one step moves E exactly; then clears the onsets.
@@ -269,8 +284,10 @@ class ThermalSystem {
     std::vector<double> lumped_emissivity_; // emissivity of each lumped slot (-)
     // Share of each particle's view that goes to the ambient (radiation_temperature): 1 minus the
     // view factors (A F)_ij / A_i of its radiating neighbours this thermal step, >= 0 (-).
-    std::vector<double> lumped_view_;    // per lumped slot
-    std::vector<double> pool_view_;      // per pool slot
+    std::vector<double> lumped_view_; // per lumped slot
+    // Resolved particles: per boundary face (face_rate_'s layout), the neighbours' view spread
+    // over the faces that see them (take_ambient_view).
+    std::vector<double> face_view_;
     std::vector<std::int64_t> slot_ids_; // id of each record created, in creation order
     std::vector<dynamics::ContactRecord> contacts_;
     std::vector<ContactData> data_;
@@ -293,6 +310,8 @@ class ThermalSystem {
     long gas_pairs_ = 0;                // gas-gap pairs
     long radiation_pairs_ = 0;          // radiating pairs
     long collisions_ = 0;               // impacts that exchanged heat (collision conduction)
+    long wall_gas_gaps_ = 0;            // particle-wall gas-gap exchanges
+    long wall_radiation_ = 0;           // particle-wall radiative exchanges
     std::vector<PendingImpact> onsets_; // taken from the System, not yet exchanged
     std::vector<std::int64_t> index_;   // particle index by id (after_step's scratch)
     bool warned_lag_ = false;

@@ -3,8 +3,9 @@
 // contact records of ThermalSystem and the small helpers its source files share. The class is
 // split by concern: thermal_system.cpp (set-up, refusals, templates, particle records),
 // thermal_contacts.cpp (contact conduction, patches and their lagged rates), thermal_pairs.cpp
-// (gas gaps, neighbour radiation, impacts), thermal_surface.cpp (convection, radiation to the
-// ambient, lumped update), thermal_step.cpp (the thermal step and its lag limit),
+// (gas gaps, neighbour radiation, impacts), thermal_body_pairs.cpp (the same for pairs with a
+// body), thermal_walls.cpp (gas gaps and radiation to walls), thermal_surface.cpp (convection,
+// radiation to the ambient, lumped update), thermal_step.cpp (the thermal step and its lag limit),
 // thermal_state.cpp (output, summary and checkpoint).
 
 #include "thermal/thermal_system.hpp"

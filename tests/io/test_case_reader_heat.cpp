@@ -185,6 +185,28 @@ TEST(CaseReaderHeat, RadiationKeysReadWithDefaultsAndRanges) {
     EXPECT_DOUBLE_EQ(r.heat.radiation_cutoff, 2.0);
 }
 
+TEST(CaseReaderHeat, WallGapKeysReadWithDefaultsAndNeedGas) {
+    // Default off: hot walls exchange by contact and collision conduction only, as before.
+    const CaseSpec d = read_case_text(base, "case.toml");
+    EXPECT_FALSE(d.heat.wall_gas);
+    EXPECT_FALSE(d.heat.wall_radiation);
+    EXPECT_NE(d.resolved_toml.find("wall_gas_gap = false"), std::string::npos);
+    EXPECT_NE(d.resolved_toml.find("wall_radiation = false"), std::string::npos);
+    const CaseSpec c = read_case_text(
+        edit("step_multiple = 50", "step_multiple = 50\ngas_conductivity = 0.026\nwall_gas_gap = "
+                                   "true\nwall_radiation = true"),
+        "case.toml");
+    EXPECT_TRUE(c.heat.wall_gas);
+    EXPECT_TRUE(c.heat.wall_radiation);
+    // Gas to the walls without a gas: refused, naming file, line, key and what is allowed.
+    std::string e = error_of(edit("step_multiple = 50", "step_multiple = 50\nwall_gas_gap = true"));
+    EXPECT_NE(e.find("case.toml:46: heat.wall_gas_gap"), std::string::npos) << e;
+    EXPECT_NE(e.find("gas_conductivity > 0"), std::string::npos) << e;
+    e = error_of(edit("step_multiple = 50", "step_multiple = 50\nwall_radiation = 2"));
+    EXPECT_NE(e.find("heat.wall_radiation"), std::string::npos) << e;
+    EXPECT_NE(e.find("expected true or false"), std::string::npos) << e;
+}
+
 TEST(CaseReaderHeat, CollisionConductionKeySwitchesOnsetRecording) {
     // Default off: the force loop records nothing (the sphere kernel runs as without heat).
     const CaseSpec d = read_case_text(base, "case.toml");

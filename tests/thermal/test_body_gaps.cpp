@@ -206,11 +206,14 @@ TEST(BodyGaps, GasGapOfABodyPairMatchesTheLibraryForItsEquivalentRadius) {
         check_pair(s, {{r, r, gap}, {r, r, across}, {r, r, across}, {r, r, gap}});
     }
     {
-        // Ellipsoids tip to tip and cubes face to face: the volume-equivalent spheres.
+        // Ellipsoids tip to tip: the local radius of curvature at the tips, 1 / sqrt(k1 k2) with
+        // k = a / b^2 and a / c^2 on the axis of half-axis a: R = b c / a. Cubes face to face:
+        // the volume-equivalent spheres.
         const geometry::ShapeTemplate e = ellipsoid(Vec3(2e-3, 1.5e-3, 1.2e-3));
         dynamics::SceneSpec s = scene({e});
         s.particles = {at(0, 0, Vec3::Zero()), at(0, 0, Vec3(4e-3 + gap, 0, 0))};
-        check_pair(s, {{volume_radius(e), volume_radius(e), gap}});
+        const double tip = 1.5e-3 * 1.2e-3 / 2e-3;
+        check_pair(s, {{tip, tip, gap}});
         const geometry::ShapeTemplate c = test::cube_template(r);
         s = scene({c});
         s.particles = {at(0, 0, Vec3::Zero()), at(0, 0, Vec3(2 * r + gap, 0, 0))};
