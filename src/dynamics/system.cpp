@@ -2,6 +2,7 @@
 
 #include "contact/contact_law.hpp"
 #include "core/error.hpp"
+#include "dynamics/pair_simd.hpp"
 #include "dynamics/time_step.hpp"
 #include "geometry/rotation.hpp"
 
@@ -373,7 +374,26 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
     }
     double energy = 0.0;
     double max_ratio = 0.0;
-    for (std::size_t a0 = 0; a0 < n_active; a0 += block) {
+    std::size_t a_first = 0; // entries before it were evaluated in registers, several at a time
+#ifdef __AVX2__
+    if constexpr (!onsets) {
+        const simd::PairArrays arrays{owner,
+                                      nb,
+                                      shear,
+                                      x,
+                                      vel,
+                                      omega,
+                                      radius,
+                                      mass,
+                                      force,
+                                      torque,
+                                      direct ? nullptr : pair_result_.data()};
+        a_first = simd::contact_groups<Law, direct>(law, pairs_, p_.material.data(), fn_floor,
+                                                    rolling, dt, arrays, active, n_active, begin,
+                                                    energy, max_ratio);
+    }
+#endif
+    for (std::size_t a0 = a_first; a0 < n_active; a0 += block) {
         const std::size_t m = std::min(block, n_active - a0);
         for (std::size_t b = 0; b < m; ++b) {
             const std::uint32_t k = active[a0 + b];
