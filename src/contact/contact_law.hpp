@@ -81,33 +81,43 @@ struct ContactOutput {
 
 namespace lanes {
 
-// The law's operations on one contact (double) or on several at once (a GCC/Clang vector type such
-// as __m256d, whose comparisons give lane masks), so that the law below is written once for both.
-// Each is exact or correctly rounded, hence the same bits per lane for either type.
+// The law's operations on one contact (double) or on several at once (a GCC/Clang vector type,
+// whose comparisons give lane masks), so that the law below is written once for both. Each is
+// exact or correctly rounded, so it gives the same bits per lane for either type; the compiler may
+// still fuse the law's products and sums into different multiply-adds (round-off only).
+
+/// a (the second argument only selects the type).
 inline double splat(double a, double /*type*/) {
     return a;
 }
+/// a where m, else b.
 inline double select(bool m, double a, double b) {
     return m ? a : b;
 }
+/// Square root.
 inline double vsqrt(double a) {
     return std::sqrt(a);
 }
+/// Absolute value.
 inline double vabs(double a) {
     return std::abs(a);
 }
+/// a in every lane of a vector of type T.
 template <class T> T splat(double a, T /*type*/) {
     return a - T{};
 }
+/// Per lane: a where the mask m is set, else b.
 template <class M, class T> T select(M m, T a, T b) {
     return m ? a : b;
 }
 #ifdef __AVX__
 /// Four doubles, one contact per lane (the GCC/Clang vector type behind __m256d).
 using V4 = double __attribute__((vector_size(32)));
+/// Square root per lane.
 inline V4 vsqrt(V4 a) {
     return _mm256_sqrt_pd(a);
 }
+/// Absolute value per lane (sign bit cleared, as std::abs).
 inline V4 vabs(V4 a) {
     return _mm256_andnot_pd(_mm256_set1_pd(-0.0), a);
 }
