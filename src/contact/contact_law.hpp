@@ -25,6 +25,10 @@
 #include <limits>
 #include <variant>
 
+#ifdef __AVX__
+#include <immintrin.h>
+#endif
+
 namespace kiln::contact {
 
 /// Hertz normal + Mindlin tangential law; all parameters come from the material pair.
@@ -75,31 +79,85 @@ struct ContactOutput {
     double elastic_energy; ///< energy stored in the normal spring (J)
 };
 
+namespace lanes {
+
+// The law's operations on one contact (double) or on several at once (a GCC/Clang vector type,
+// whose comparisons give lane masks), so that the law below is written once for both. Each is
+// exact or correctly rounded, so it gives the same bits per lane for either type; the compiler may
+// still fuse the law's products and sums into different multiply-adds (round-off only).
+
+/// a (the second argument only selects the type).
+inline double splat(double a, double /*type*/) {
+    return a;
+}
+/// a where m, else b.
+inline double select(bool m, double a, double b) {
+    return m ? a : b;
+}
+/// Square root.
+inline double vsqrt(double a) {
+    return std::sqrt(a);
+}
+/// Absolute value.
+inline double vabs(double a) {
+    return std::abs(a);
+}
+/// a in every lane of a vector of type T.
+template <class T> T splat(double a, T /*type*/) {
+    return a - T{};
+}
+/// Per lane: a where the mask m is set, else b.
+template <class M, class T> T select(M m, T a, T b) {
+    return m ? a : b;
+}
+#ifdef __AVX__
+/// Four doubles, one contact per lane (the GCC/Clang vector type behind __m256d).
+using V4 = double __attribute__((vector_size(32)));
+/// Square root per lane.
+inline V4 vsqrt(V4 a) {
+    return _mm256_sqrt_pd(a);
+}
+/// Absolute value per lane (sign bit cleared, as std::abs).
+inline V4 vabs(V4 a) {
+    return _mm256_andnot_pd(_mm256_set1_pd(-0.0), a);
+}
+#endif
+/// std::max(a, b): a unless a < b.
+template <class T> T vmax(T a, T b) {
+    return select(a < b, b, a);
+}
+
+} // namespace lanes
+
 namespace detail {
 
-struct Stiffness {
-    double kn;     // normal secant stiffness, F_el = kn * delta (N/m)
-    double gn;     // normal damping coefficient (kg/s), >= 0
-    double kt;     // tangential stiffness (N/m)
-    double gt;     // tangential damping coefficient (kg/s), >= 0
-    double energy; // elastic energy of the normal spring (J)
+template <class T> struct Stiffness {
+    T kn;     // normal secant stiffness, F_el = kn * delta (N/m)
+    T gn;     // normal damping coefficient (kg/s), >= 0
+    T kt;     // tangential stiffness (N/m)
+    T gt;     // tangential damping coefficient (kg/s), >= 0
+    T energy; // elastic energy of the normal spring (J)
 };
 
-inline Stiffness stiffness(const HertzMindlin&, double e_star, double g_star, double beta,
-                           double r_eff, double m_eff, double overlap) {
-    const double a = std::sqrt(r_eff * overlap); // contact radius (m)
-    const double sn = 2.0 * e_star * a;
-    const double st = 8.0 * g_star * a;
+template <class T>
+inline Stiffness<T> stiffness(const HertzMindlin&, T e_star, T g_star, T beta, T r_eff, T m_eff,
+                              T overlap) {
+    using lanes::vsqrt;
+    const T a = vsqrt(r_eff * overlap); // contact radius (m)
+    const T sn = 2.0 * e_star * a;
+    const T st = 8.0 * g_star * a;
     constexpr double k56 = 1.8257418583505538; // 2 sqrt(5/6)
-    const double kn = 2.0 / 3.0 * sn;          // 4/3 E* sqrt(R* delta)
-    return {kn, -k56 * beta * std::sqrt(sn * m_eff), st, -k56 * beta * std::sqrt(st * m_eff),
+    const T kn = 2.0 / 3.0 * sn;               // 4/3 E* sqrt(R* delta)
+    return {kn, -k56 * beta * vsqrt(sn * m_eff), st, -k56 * beta * vsqrt(st * m_eff),
             0.4 * kn * overlap * overlap};
 }
 
-inline Stiffness stiffness(const LinearSpringDashpot& law, double, double, double beta, double,
-                           double m_eff, double overlap) {
-    return {law.stiffness, -2.0 * beta * std::sqrt(m_eff * law.stiffness),
-            law.tangential_ratio * law.stiffness, 0.0, 0.5 * law.stiffness * overlap * overlap};
+template <class T>
+inline Stiffness<T> stiffness(const LinearSpringDashpot& law, T, T, T beta, T, T m_eff, T overlap) {
+    using lanes::splat;
+    return {splat(law.stiffness, beta), -2.0 * beta * lanes::vsqrt(m_eff * law.stiffness),
+            splat(law.tangential_ratio * law.stiffness, beta), splat(0.0, beta),
+            0.5 * law.stiffness * overlap * overlap};
 }
 
 } // namespace detail
@@ -133,92 +191,141 @@ template <std::size_t B> struct ContactBlock {
     }
 };
 
-/// Evaluates contact b of a block; written without branches so that a loop over b vectorises.
-/// This is the single implementation of the laws above; `evaluate` wraps it for one contact.
-/// `fn_floor` is 0 when the normal force is clamped, -inf otherwise; `rolling` is 1 with rolling
-/// resistance, 0 without (scalars, so the loop carries no flag loads).
-template <class Law, std::size_t B>
-[[gnu::always_inline]] inline void evaluate_block(const Law& law, double fn_floor, double rolling,
-                                                  ContactBlock<B>& c, std::size_t b, double dt) {
-    const detail::Stiffness k = detail::stiffness(law, c.e_star[b], c.g_star[b], c.beta[b],
-                                                  c.r_eff[b], c.m_eff[b], c.overlap[b]);
-    const double n0 = c.n[0][b];
-    const double n1 = c.n[1][b];
-    const double n2 = c.n[2][b];
-    const double vn = c.v[0][b] * n0 + c.v[1][b] * n1 + c.v[2][b] * n2;
-    double fn = k.kn * c.overlap[b] - k.gn * vn;
-    fn = std::max(fn, fn_floor);
+/// One contact (T = double) or several side by side (T a vector type, one contact per lane): the
+/// inputs of ContactBlock, world frame, with the history s updated in place and the results.
+template <class T> struct ContactLanes {
+    T n[3], overlap, r_eff, m_eff, lever_i, lever_j; // geometry
+    T v[3], wi[3], wj[3];                            // kinematics
+    T e_star, g_star, beta, mu, mu_roll;             // pair properties
+    T s[3];                                          // history, in/out
+    T f[3], ti[3], tj[3], fn, energy;                // results
+};
+
+/// Evaluates the law on c; written without branches, so that it runs on vector lanes and a loop
+/// over the contacts of a block vectorises. This is the single implementation of the laws above;
+/// `evaluate_block` and `evaluate` wrap it. `fn_floor` is 0 when the normal force is clamped, -inf
+/// otherwise; `rolling` is 1 with rolling resistance, 0 without (scalars, so the loop carries no
+/// flag loads).
+template <class Law, class T>
+[[gnu::always_inline]] inline void evaluate_lanes(const Law& law, double fn_floor, double rolling,
+                                                  ContactLanes<T>& c, double dt) {
+    using lanes::select;
+    using lanes::vabs;
+    using lanes::vsqrt;
+    const T zero = lanes::splat(0.0, c.overlap);
+    const T one = lanes::splat(1.0, c.overlap);
+    const detail::Stiffness<T> k =
+        detail::stiffness(law, c.e_star, c.g_star, c.beta, c.r_eff, c.m_eff, c.overlap);
+    const T n0 = c.n[0];
+    const T n1 = c.n[1];
+    const T n2 = c.n[2];
+    const T vn = c.v[0] * n0 + c.v[1] * n1 + c.v[2] * n2;
+    T fn = k.kn * c.overlap - k.gn * vn;
+    fn = lanes::vmax(fn, lanes::splat(fn_floor, fn));
 
     // Tangential velocity of the contact point of i relative to j: v - (l_i w_i + l_j w_j) x n.
-    const double w0 = c.lever_i[b] * c.wi[0][b] + c.lever_j[b] * c.wj[0][b];
-    const double w1 = c.lever_i[b] * c.wi[1][b] + c.lever_j[b] * c.wj[1][b];
-    const double w2 = c.lever_i[b] * c.wi[2][b] + c.lever_j[b] * c.wj[2][b];
-    const double vc0 = c.v[0][b] - (w1 * n2 - w2 * n1);
-    const double vc1 = c.v[1][b] - (w2 * n0 - w0 * n2);
-    const double vc2 = c.v[2][b] - (w0 * n1 - w1 * n0);
-    const double vcn = vc0 * n0 + vc1 * n1 + vc2 * n2;
-    const double vt0 = vc0 - vcn * n0;
-    const double vt1 = vc1 - vcn * n1;
-    const double vt2 = vc2 - vcn * n2;
+    const T w0 = c.lever_i * c.wi[0] + c.lever_j * c.wj[0];
+    const T w1 = c.lever_i * c.wi[1] + c.lever_j * c.wj[1];
+    const T w2 = c.lever_i * c.wi[2] + c.lever_j * c.wj[2];
+    const T vc0 = c.v[0] - (w1 * n2 - w2 * n1);
+    const T vc1 = c.v[1] - (w2 * n0 - w0 * n2);
+    const T vc2 = c.v[2] - (w0 * n1 - w1 * n0);
+    const T vcn = vc0 * n0 + vc1 * n1 + vc2 * n2;
+    const T vt0 = vc0 - vcn * n0;
+    const T vt1 = vc1 - vcn * n1;
+    const T vt2 = vc2 - vcn * n2;
 
     // History: rotate into the tangent plane keeping its length, then add this step's slip.
-    double s0 = c.s[0][b];
-    double s1 = c.s[1][b];
-    double s2 = c.s[2][b];
-    const double len2 = s0 * s0 + s1 * s1 + s2 * s2;
-    const double sn = s0 * n0 + s1 * n1 + s2 * n2;
+    T s0 = c.s[0];
+    T s1 = c.s[1];
+    T s2 = c.s[2];
+    const T len2 = s0 * s0 + s1 * s1 + s2 * s2;
+    const T sn = s0 * n0 + s1 * n1 + s2 * n2;
     s0 -= sn * n0;
     s1 -= sn * n1;
     s2 -= sn * n2;
-    const double new2 = s0 * s0 + s1 * s1 + s2 * s2;
+    const T new2 = s0 * s0 + s1 * s1 + s2 * s2;
     // Square roots and divisions are taken of safe arguments and selected afterwards: no branches.
-    const double keep_raw = std::sqrt(len2 / (new2 > 0.0 ? new2 : 1.0));
-    const double keep = new2 > 0.0 ? keep_raw : 1.0;
+    const T keep_raw = vsqrt(len2 / select(new2 > zero, new2, one));
+    const T keep = select(new2 > zero, keep_raw, one);
     s0 = s0 * keep + vt0 * dt;
     s1 = s1 * keep + vt1 * dt;
     s2 = s2 * keep + vt2 * dt;
-    double ft0 = -k.kt * s0 - k.gt * vt0;
-    double ft1 = -k.kt * s1 - k.gt * vt1;
-    double ft2 = -k.kt * s2 - k.gt * vt2;
+    T ft0 = -k.kt * s0 - k.gt * vt0;
+    T ft1 = -k.kt * s1 - k.gt * vt1;
+    T ft2 = -k.kt * s2 - k.gt * vt2;
 
     // Coulomb: when sliding, cap the force and reset the spring so it carries exactly the cap.
     // Without friction there is no spring and no history.
-    const double ftsq = ft0 * ft0 + ft1 * ft1 + ft2 * ft2;
-    const double cap = c.mu[b] * std::abs(fn);
-    const bool slide = ftsq > cap * cap;
-    const double on = c.mu[b] > 0.0 ? 1.0 : 0.0;
-    const double capped = cap / std::sqrt(ftsq > 0.0 ? ftsq : 1.0);
-    const double scale = on * (slide ? capped : 1.0);
+    const T ftsq = ft0 * ft0 + ft1 * ft1 + ft2 * ft2;
+    const T cap = c.mu * vabs(fn);
+    const auto slide = ftsq > cap * cap;
+    const T on = select(c.mu > zero, one, zero);
+    const T capped = cap / vsqrt(select(ftsq > zero, ftsq, one));
+    const T scale = on * select(slide, capped, one);
     ft0 *= scale;
     ft1 *= scale;
     ft2 *= scale;
-    const double inv_kt = 1.0 / k.kt;
-    c.s[0][b] = on * (slide ? -ft0 * inv_kt : s0);
-    c.s[1][b] = on * (slide ? -ft1 * inv_kt : s1);
-    c.s[2][b] = on * (slide ? -ft2 * inv_kt : s2);
-    c.f[0][b] = fn * n0 + ft0;
-    c.f[1][b] = fn * n1 + ft1;
-    c.f[2][b] = fn * n2 + ft2;
-    const double nxf0 = n1 * ft2 - n2 * ft1;
-    const double nxf1 = n2 * ft0 - n0 * ft2;
-    const double nxf2 = n0 * ft1 - n1 * ft0;
+    const T inv_kt = 1.0 / k.kt;
+    c.s[0] = on * select(slide, -ft0 * inv_kt, s0);
+    c.s[1] = on * select(slide, -ft1 * inv_kt, s1);
+    c.s[2] = on * select(slide, -ft2 * inv_kt, s2);
+    c.f[0] = fn * n0 + ft0;
+    c.f[1] = fn * n1 + ft1;
+    c.f[2] = fn * n2 + ft2;
+    const T nxf0 = n1 * ft2 - n2 * ft1;
+    const T nxf1 = n2 * ft0 - n0 * ft2;
+    const T nxf2 = n0 * ft1 - n1 * ft0;
 
     // Rolling resistance, constant directional torque.
-    const double wr0 = c.wi[0][b] - c.wj[0][b];
-    const double wr1 = c.wi[1][b] - c.wj[1][b];
-    const double wr2 = c.wi[2][b] - c.wj[2][b];
-    const double wn = std::sqrt(wr0 * wr0 + wr1 * wr1 + wr2 * wr2);
-    const double mr_raw =
-        -rolling * c.mu_roll[b] * c.r_eff[b] * std::abs(fn) / (wn > 1e-12 ? wn : 1.0);
-    const double mr = wn > 1e-12 ? mr_raw : 0.0;
-    c.ti[0][b] = -c.lever_i[b] * nxf0 + mr * wr0;
-    c.ti[1][b] = -c.lever_i[b] * nxf1 + mr * wr1;
-    c.ti[2][b] = -c.lever_i[b] * nxf2 + mr * wr2;
-    c.tj[0][b] = -c.lever_j[b] * nxf0 - mr * wr0;
-    c.tj[1][b] = -c.lever_j[b] * nxf1 - mr * wr1;
-    c.tj[2][b] = -c.lever_j[b] * nxf2 - mr * wr2;
-    c.fn[b] = fn;
-    c.energy[b] = k.energy;
+    const T wr0 = c.wi[0] - c.wj[0];
+    const T wr1 = c.wi[1] - c.wj[1];
+    const T wr2 = c.wi[2] - c.wj[2];
+    const T wn = vsqrt(wr0 * wr0 + wr1 * wr1 + wr2 * wr2);
+    const T tiny = lanes::splat(1e-12, wn);
+    const T mr_raw = -rolling * c.mu_roll * c.r_eff * vabs(fn) / select(wn > tiny, wn, one);
+    const T mr = select(wn > tiny, mr_raw, zero);
+    c.ti[0] = -c.lever_i * nxf0 + mr * wr0;
+    c.ti[1] = -c.lever_i * nxf1 + mr * wr1;
+    c.ti[2] = -c.lever_i * nxf2 + mr * wr2;
+    c.tj[0] = -c.lever_j * nxf0 - mr * wr0;
+    c.tj[1] = -c.lever_j * nxf1 - mr * wr1;
+    c.tj[2] = -c.lever_j * nxf2 - mr * wr2;
+    c.fn = fn;
+    c.energy = k.energy;
+}
+
+/// Evaluates contact b of a block (evaluate_lanes on one contact); a loop over b vectorises.
+template <class Law, std::size_t B>
+[[gnu::always_inline]] inline void evaluate_block(const Law& law, double fn_floor, double rolling,
+                                                  ContactBlock<B>& c, std::size_t b, double dt) {
+    ContactLanes<double> l;
+    for (int q = 0; q < 3; ++q) {
+        l.n[q] = c.n[q][b];
+        l.v[q] = c.v[q][b];
+        l.wi[q] = c.wi[q][b];
+        l.wj[q] = c.wj[q][b];
+        l.s[q] = c.s[q][b];
+    }
+    l.overlap = c.overlap[b];
+    l.r_eff = c.r_eff[b];
+    l.m_eff = c.m_eff[b];
+    l.lever_i = c.lever_i[b];
+    l.lever_j = c.lever_j[b];
+    l.e_star = c.e_star[b];
+    l.g_star = c.g_star[b];
+    l.beta = c.beta[b];
+    l.mu = c.mu[b];
+    l.mu_roll = c.mu_roll[b];
+    evaluate_lanes(law, fn_floor, rolling, l, dt);
+    for (int q = 0; q < 3; ++q) {
+        c.s[q][b] = l.s[q];
+        c.f[q][b] = l.f[q];
+        c.ti[q][b] = l.ti[q];
+        c.tj[q][b] = l.tj[q];
+    }
+    c.fn[b] = l.fn;
+    c.energy[b] = l.energy;
 }
 
 /// Evaluates one contact and updates its tangential history `shear` (m, world, on i relative to j).

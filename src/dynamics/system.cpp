@@ -2,6 +2,7 @@
 
 #include "contact/contact_law.hpp"
 #include "core/error.hpp"
+#include "dynamics/pair_simd.hpp"
 #include "dynamics/time_step.hpp"
 #include "geometry/rotation.hpp"
 
@@ -375,7 +376,62 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
     }
     double energy = 0.0;
     double max_ratio = 0.0;
-    for (std::size_t a0 = 0; a0 < n_active; a0 += block) {
+    if constexpr (onsets) {
+        // Contact starts: touching now, apart at the start of the step. The drift was
+        // x^(n+1) = x^n + dt v^(n+1/2) with the velocities read here (the closing half kick comes
+        // after the forces), so the start-of-step separation is d - dt (v_i - v_j) and v^(n+1/2)
+        // is the velocity before the impact. Only reads: the forces are those of a run without
+        // recording, bit for bit.
+        for (std::size_t a = 0; a < n_active; ++a) {
+            const std::uint32_t k = active[a];
+            const std::uint32_t i = owner[k];
+            const std::uint32_t j = nb[k];
+            const double rsum = radius[i] + radius[j];
+            double dq[3];
+            double before = 0.0;
+            double dist2 = 0.0;
+            double closing = 0.0;
+            for (int q = 0; q < 3; ++q) {
+                dq[q] = x[i][q] - x[j][q];
+                const double vq = vel[i][q] - vel[j][q];
+                const double e = dq[q] - dt * vq;
+                before += e * e;
+                dist2 += dq[q] * dq[q];
+                closing += vq * dq[q];
+            }
+            if (before >= rsum * rsum) {
+                const double dist = std::sqrt(dist2);
+                ContactOnset e;
+                e.id_i = p_.id[i];
+                e.id_j = p_.id[j];
+                e.speed = std::max(0.0, -closing / dist);
+                e.r_eff = radius[i] * radius[j] / rsum;
+                e.m_eff = mass[i] * mass[j] / (mass[i] + mass[j]);
+                for (int q = 0; q < 3; ++q) {
+                    e.normal[q] = -dq[q] / dist; // d runs from j to i
+                }
+                pair_onsets_[begin / pair_chunk_size].push_back(e);
+            }
+        }
+    }
+    std::size_t a_first = 0; // entries before it were evaluated in registers, several at a time
+#ifdef __AVX2__
+    const simd::PairArrays arrays{owner,
+                                  nb,
+                                  shear,
+                                  x,
+                                  vel,
+                                  omega,
+                                  radius,
+                                  mass,
+                                  force,
+                                  torque,
+                                  direct ? nullptr : pair_result_.data()};
+    a_first =
+        simd::contact_groups<Law, direct>(law, pairs_, p_.material.data(), fn_floor, rolling, dt,
+                                          arrays, active, n_active, begin, energy, max_ratio);
+#endif
+    for (std::size_t a0 = a_first; a0 < n_active; a0 += block) {
         const std::size_t m = std::min(block, n_active - a0);
         for (std::size_t b = 0; b < m; ++b) {
             const std::uint32_t k = active[a0 + b];
@@ -394,38 +450,6 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
             mj[b] = mass[j];
             if (!one_pair) {
                 c.set_pair(b, pairs_.at(p_.material[i], p_.material[j]));
-            }
-        }
-        if constexpr (onsets) {
-            // Contact starts: touching now, apart at the start of the step. The drift was
-            // x^(n+1) = x^n + dt v^(n+1/2) with the velocities gathered here (the closing half
-            // kick comes after the forces), so the start-of-step separation is d - dt (v_i - v_j)
-            // and v^(n+1/2) is the velocity before the impact.
-            for (std::size_t b = 0; b < m; ++b) {
-                const double rsum = ri[b] + rj[b];
-                double before = 0.0;
-                double dist2 = 0.0;
-                double closing = 0.0;
-                for (int q = 0; q < 3; ++q) {
-                    const double e = d[q][b] - dt * c.v[q][b];
-                    before += e * e;
-                    dist2 += d[q][b] * d[q][b];
-                    closing += c.v[q][b] * d[q][b];
-                }
-                if (before >= rsum * rsum) {
-                    const std::uint32_t k = active[a0 + b];
-                    const double dist = std::sqrt(dist2);
-                    ContactOnset e;
-                    e.id_i = p_.id[owner[k]];
-                    e.id_j = p_.id[nb[k]];
-                    e.speed = std::max(0.0, -closing / dist);
-                    e.r_eff = ri[b] * rj[b] / rsum;
-                    e.m_eff = mi[b] * mj[b] / (mi[b] + mj[b]);
-                    for (int q = 0; q < 3; ++q) {
-                        e.normal[q] = -d[q][b] / dist; // d runs from j to i
-                    }
-                    pair_onsets_[begin / pair_chunk_size].push_back(e);
-                }
             }
         }
 #pragma omp simd

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <gtest/gtest.h>
 #include <numbers>
+#include <random>
 
 namespace kiln::contact {
 namespace {
@@ -108,6 +109,98 @@ TEST(Rolling, ConstantTorqueOpposesRelativeRotation) {
     EXPECT_NEAR(o.torque_i.y(), -0.1 * c.r_eff * o.normal_force, 1e-12);
     EXPECT_NEAR(o.torque_j.y(), 0.1 * c.r_eff * o.normal_force, 1e-12);
 }
+
+#ifdef __AVX__
+// The pair loop evaluates contacts several at a time on the lanes of a vector register
+// (dynamics/pair_simd.hpp); the law must give each lane what it gives one contact alone. Random
+// contacts cover sticking and sliding, zero history, no friction, rolling with and without
+// relative spin, the clamp and no clamp, for both laws.
+template <class V, class Law> void lanes_match_one_contact(const Law& law) {
+    constexpr int w = sizeof(V) / sizeof(double);
+    // Relative, per vector: the compiler may fuse different multiply-adds in vector and scalar
+    // code (round-off only).
+    constexpr double fused = 1e-11;
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int sliding = 0;
+    for (int it = 0; it < 500; ++it) {
+        const double fn_floor = it % 2 == 0 ? 0.0 : -std::numeric_limits<double>::infinity();
+        const double rolling = it % 3 == 0 ? 0.0 : 1.0;
+        ContactLanes<V> lanes{};
+        ContactLanes<double> one[w];
+        for (int l = 0; l < w; ++l) {
+            ContactLanes<double>& c = one[l];
+            Vec3 n(u(rng), u(rng), u(rng));
+            n.normalize();
+            for (int q = 0; q < 3; ++q) {
+                c.n[q] = n[q];
+                c.v[q] = 0.5 * u(rng);
+                c.wi[q] = it % 5 == 0 ? 0.0 : 20.0 * u(rng);
+                c.wj[q] = it % 5 == 0 ? 0.0 : 20.0 * u(rng);
+                c.s[q] = it % 7 == 0 ? 0.0 : 2e-5 * u(rng);
+            }
+            c.overlap = 1e-5 * (1.0 + u(rng));
+            c.r_eff = 1e-3 * (1.5 + u(rng));
+            c.m_eff = 1e-4 * (1.5 + u(rng));
+            c.lever_i = 2e-3;
+            c.lever_j = 1.5e-3;
+            c.e_star = 3e6 * (1.5 + u(rng));
+            c.g_star = 1e6 * (1.5 + u(rng));
+            c.beta = -0.3 + 0.1 * u(rng);
+            c.mu = it % 11 == 0 ? 0.0 : 0.4 + 0.3 * u(rng);
+            c.mu_roll = 0.05 * (1.0 + u(rng));
+            for (int q = 0; q < 3; ++q) {
+                lanes.n[q][l] = c.n[q];
+                lanes.v[q][l] = c.v[q];
+                lanes.wi[q][l] = c.wi[q];
+                lanes.wj[q][l] = c.wj[q];
+                lanes.s[q][l] = c.s[q];
+            }
+            lanes.overlap[l] = c.overlap;
+            lanes.r_eff[l] = c.r_eff;
+            lanes.m_eff[l] = c.m_eff;
+            lanes.lever_i[l] = c.lever_i;
+            lanes.lever_j[l] = c.lever_j;
+            lanes.e_star[l] = c.e_star;
+            lanes.g_star[l] = c.g_star;
+            lanes.beta[l] = c.beta;
+            lanes.mu[l] = c.mu;
+            lanes.mu_roll[l] = c.mu_roll;
+        }
+        evaluate_lanes(law, fn_floor, rolling, lanes, 1e-5);
+        for (int l = 0; l < w; ++l) {
+            ContactLanes<double>& c = one[l];
+            const Vec3 s_in(c.s[0], c.s[1], c.s[2]);
+            evaluate_lanes(law, fn_floor, rolling, c, 1e-5);
+            const auto near = [&](const double(&a)[3], const V(&b)[3]) {
+                const Vec3 x(a[0], a[1], a[2]);
+                const Vec3 y(b[0][l], b[1][l], b[2][l]);
+                EXPECT_LE((x - y).norm(), fused * x.norm()) << "contact " << it << " lane " << l;
+            };
+            near(c.f, lanes.f);
+            near(c.ti, lanes.ti);
+            near(c.tj, lanes.tj);
+            near(c.s, lanes.s);
+            EXPECT_NEAR(c.fn, lanes.fn[l], fused * std::abs(c.fn));
+            EXPECT_NEAR(c.energy, lanes.energy[l], fused * c.energy);
+            const Vec3 s_out(c.s[0], c.s[1], c.s[2]);
+            sliding += c.mu > 0.0 && (s_out - s_in).norm() > 0.0 &&
+                               std::abs(Vec3(c.f[0], c.f[1], c.f[2])
+                                            .cross(Vec3(c.n[0], c.n[1], c.n[2]))
+                                            .norm() -
+                                        c.mu * std::abs(c.fn)) < 1e-9 * std::abs(c.fn)
+                           ? 1
+                           : 0;
+        }
+    }
+    EXPECT_GT(sliding, 50); // both regimes are exercised (the rest stick)
+}
+
+TEST(VectorLanes, FourLanesMatchOneContactAtATime) {
+    lanes_match_one_contact<lanes::V4>(HertzMindlin{});
+    lanes_match_one_contact<lanes::V4>(LinearSpringDashpot{1e5, 2.0 / 7.0});
+}
+#endif
 
 } // namespace
 } // namespace kiln::contact

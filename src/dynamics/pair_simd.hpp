@@ -1,0 +1,213 @@
+#pragma once
+// Register path of the sphere pair loop (System::pair_chunk) with AVX2: the touching pairs are
+// taken four at a time, the particles' Vec3 records (x, y, z at a 24-byte stride, world frame) are
+// read as one 16-byte (x, y) and one 8-byte (z) load each and transposed into one register per
+// component, geometry and law (contact::evaluate_lanes) run on the four lanes, and the results are
+// transposed back and added to the particles in list order. Nothing is staged through memory, as
+// in notes/limits.md's dem2 (AoS records and 4 x 4 register transposes). Without AVX2 the pair
+// loop uses its blocked structure-of-arrays path only.
+
+#include "contact/contact_law.hpp"
+#include "core/material.hpp"
+#include "core/types.hpp"
+
+#include <algorithm>
+#include <cstdint>
+
+#ifdef __AVX2__
+#include <immintrin.h>
+#endif
+
+namespace kiln::dynamics::simd {
+
+#ifdef __AVX2__
+/// Components x, y, z of four records, one register each (lane l = record l).
+struct Columns {
+    __m256d c[3];
+};
+
+/// Reads the records a[p[0..3]] and transposes them into columns.
+inline Columns columns(const Vec3* __restrict a, const std::uint32_t p[4]) {
+    const double* r0 = a[p[0]].data();
+    const double* r1 = a[p[1]].data();
+    const double* r2 = a[p[2]].data();
+    const double* r3 = a[p[3]].data();
+    // (x0, y0 | x2, y2) and (x1, y1 | x3, y3), unpacked into (x0, x1, x2, x3) and (y0, .., y3).
+    const __m256d r02 =
+        _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(r0)), _mm_loadu_pd(r2), 1);
+    const __m256d r13 =
+        _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(r1)), _mm_loadu_pd(r3), 1);
+    const __m128d z01 = _mm_loadh_pd(_mm_load_sd(r0 + 2), r1 + 2);
+    const __m128d z23 = _mm_loadh_pd(_mm_load_sd(r2 + 2), r3 + 2);
+    return {{_mm256_unpacklo_pd(r02, r13), _mm256_unpackhi_pd(r02, r13),
+             _mm256_insertf128_pd(_mm256_castpd128_pd256(z01), z23, 1)}};
+}
+#endif
+
+#ifdef __AVX2__
+/// The (x, y) parts of four rows, from the columns col0 = x and col1 = y of four contacts.
+struct RowsXY {
+    __m128d r[4];
+};
+
+/// Transposes the x and y columns of four contacts, held in registers, into (x, y) rows.
+inline RowsXY rows_xy(__m256d x, __m256d y) {
+    const __m256d lo = _mm256_unpacklo_pd(x, y); // x0 y0 | x2 y2
+    const __m256d hi = _mm256_unpackhi_pd(x, y); // x1 y1 | x3 y3
+    return {{_mm256_castpd256_pd128(lo), _mm256_castpd256_pd128(hi), _mm256_extractf128_pd(lo, 1),
+             _mm256_extractf128_pd(hi, 1)}};
+}
+
+/// a += (xy, z), component by component.
+inline void add_to(Vec3& a, __m128d xy, double z) {
+    double* p = a.data();
+    _mm_storeu_pd(p, _mm_add_pd(_mm_loadu_pd(p), xy));
+    p[2] += z;
+}
+
+/// a -= (xy, z), component by component.
+inline void sub_from(Vec3& a, __m128d xy, double z) {
+    double* p = a.data();
+    _mm_storeu_pd(p, _mm_sub_pd(_mm_loadu_pd(p), xy));
+    p[2] -= z;
+}
+
+/// a = (xy, z).
+inline void set(Vec3& a, __m128d xy, double z) {
+    double* p = a.data();
+    _mm_storeu_pd(p, xy);
+    p[2] = z;
+}
+#endif
+
+#ifdef __AVX2__
+/// Particle arrays (world frame, SI) read and written by `contact_groups`, and the list's arrays.
+struct PairArrays {
+    const std::uint32_t* owner; ///< list entry -> particle i
+    const std::uint32_t* nb;    ///< list entry -> partner j
+    Vec3* shear;                ///< list entry -> tangential history (m)
+    const Vec3* x;              ///< positions (m)
+    const Vec3* vel;            ///< velocities (m/s)
+    const Vec3* omega;          ///< angular velocities (rad/s)
+    const double* radius;       ///< radii (m)
+    const double* mass;         ///< masses (kg)
+    Vec3* force;                ///< forces (N), one thread only
+    Vec3* torque;               ///< torques (N m), one thread only
+    double* rows;               ///< pair result rows (f, torque_i, torque_j), several threads only
+};
+
+/// The touching list entries active[0..n) of a chunk, four at a time with the law on the four
+/// lanes of a register (AVX2): records transposed in registers, geometry and law (evaluate_lanes),
+/// then the results added to force/torque contact by contact in list order (`direct`, one thread)
+/// or written to rows[9 (first_row + a)] (several threads). Pair properties from `pairs` by the
+/// particles' `material`. Returns how many entries it took (a multiple of four); energy and
+/// max_ratio accumulate in entry order.
+template <class Law, bool direct>
+std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
+                           double fn_floor, double rolling, double dt, const PairArrays& a,
+                           const std::uint32_t* active, std::size_t n, std::size_t first_row,
+                           double& energy, double& max_ratio) {
+    constexpr int W = 4;
+    using V = contact::lanes::V4;
+    using contact::lanes::select;
+    contact::ContactLanes<V> c{};
+    const bool one_pair = pairs.size() == 1;
+    if (one_pair) {
+        const PairProperties& pp = pairs.at(0, 0);
+        c.e_star = contact::lanes::splat(pp.effective_modulus, c.e_star);
+        c.g_star = contact::lanes::splat(pp.effective_shear, c.e_star);
+        c.beta = contact::lanes::splat(pp.beta, c.e_star);
+        c.mu = contact::lanes::splat(pp.friction, c.e_star);
+        c.mu_roll = contact::lanes::splat(pp.rolling_friction, c.e_star);
+    }
+    std::size_t g = 0;
+    for (; g + W <= n; g += W) {
+        std::uint32_t ks[W];
+        std::uint32_t is[W];
+        std::uint32_t js[W];
+        V ri{};
+        V rj{};
+        V mi{};
+        V mj{};
+        for (int l = 0; l < W; ++l) {
+            ks[l] = active[g + l];
+            is[l] = a.owner[ks[l]];
+            js[l] = a.nb[ks[l]];
+            ri[l] = a.radius[is[l]];
+            rj[l] = a.radius[js[l]];
+            mi[l] = a.mass[is[l]];
+            mj[l] = a.mass[js[l]];
+        }
+        if (!one_pair) {
+            for (int l = 0; l < W; ++l) {
+                const PairProperties& pp = pairs.at(material[is[l]], material[js[l]]);
+                c.e_star[l] = pp.effective_modulus;
+                c.g_star[l] = pp.effective_shear;
+                c.beta[l] = pp.beta;
+                c.mu[l] = pp.friction;
+                c.mu_roll[l] = pp.rolling_friction;
+            }
+        }
+        const Columns xi = columns(a.x, is);
+        const Columns xj = columns(a.x, js);
+        const Columns vi = columns(a.vel, is);
+        const Columns vj = columns(a.vel, js);
+        const Columns wi = columns(a.omega, is);
+        const Columns wj = columns(a.omega, js);
+        const Columns sh = columns(a.shear, ks);
+        V d[3];
+        for (int q = 0; q < 3; ++q) {
+            d[q] = xi.c[q] - xj.c[q];
+            c.v[q] = vi.c[q] - vj.c[q];
+            c.wi[q] = wi.c[q];
+            c.wj[q] = wj.c[q];
+            c.s[q] = sh.c[q];
+        }
+        // Geometry as in the blocked loop of System::pair_chunk, with three divisions fewer (the
+        // divider is the busiest unit here): one for the normal, one shared by R* and m*.
+        const V rsum = ri + rj;
+        const V dist = contact::lanes::vsqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        const V overlap = rsum - dist;
+        const V inv_dist = 1.0 / dist;
+        for (int q = 0; q < 3; ++q) {
+            c.n[q] = d[q] * inv_dist;
+        }
+        c.overlap = overlap;
+        const V msum = mi + mj;
+        const V inv_rm = 1.0 / (rsum * msum);
+        c.r_eff = ri * rj * msum * inv_rm;
+        c.m_eff = mi * mj * rsum * inv_rm;
+        c.lever_i = ri - 0.5 * overlap;
+        c.lever_j = rj - 0.5 * overlap;
+        const V ratio = overlap / (2.0 * select(rj < ri, rj, ri)); // std::min(ri, rj)
+        contact::evaluate_lanes(law, fn_floor, rolling, c, dt);
+
+        const RowsXY f = rows_xy(c.f[0], c.f[1]);
+        const RowsXY ti = rows_xy(c.ti[0], c.ti[1]);
+        const RowsXY tj = rows_xy(c.tj[0], c.tj[1]);
+        const RowsXY s = rows_xy(c.s[0], c.s[1]);
+        for (int l = 0; l < W; ++l) {
+            if constexpr (direct) {
+                add_to(a.force[is[l]], f.r[l], c.f[2][l]);
+                sub_from(a.force[js[l]], f.r[l], c.f[2][l]);
+                add_to(a.torque[is[l]], ti.r[l], c.ti[2][l]);
+                add_to(a.torque[js[l]], tj.r[l], c.tj[2][l]);
+            } else {
+                double* r = a.rows + 9 * (first_row + g + l);
+                _mm_storeu_pd(r, f.r[l]);
+                r[2] = c.f[2][l];
+                _mm_storeu_pd(r + 3, ti.r[l]);
+                r[5] = c.ti[2][l];
+                _mm_storeu_pd(r + 6, tj.r[l]);
+                r[8] = c.tj[2][l];
+            }
+            set(a.shear[ks[l]], s.r[l], c.s[2][l]);
+            energy += c.energy[l];
+            max_ratio = std::max(max_ratio, ratio[l]);
+        }
+    }
+    return g;
+}
+#endif
+
+} // namespace kiln::dynamics::simd
