@@ -1,5 +1,6 @@
 #!/usr/bin/python3
-"""Plots every column of a kiln monitors.csv against time into monitors.png next to it.
+"""Plots every column of a kiln monitors.csv against time into monitors.png next to it, and the
+group temperatures (columns mean_temperature:NAME, one per shape) together into temperatures.png.
 
 Usage: scripts/plot_monitors.py OUTPUT_DIR   (uses Debian's python3-matplotlib)
 """
@@ -43,6 +44,23 @@ def main() -> int:
     fig.tight_layout()
     fig.savefig(out / "monitors.png", dpi=110)
     print(f"  plot: {out / 'monitors.png'}")
+    groups = [n for n in names if n.startswith("mean_temperature:")]
+    if groups:
+        fig, ax = plt.subplots(figsize=(7, 4.2))
+        for name in groups:
+            y = [float(r[name]) for r in rows]
+            ax.plot(t, y, lw=1.5, label=name.split(":", 1)[1])
+        if "mean_temperature" in names:
+            y = [float(r["mean_temperature"]) for r in rows]
+            ax.plot(t, y, "k--", lw=1.0, label="all particles")
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("mean temperature (K)")
+        ax.set_title("heat-capacity weighted mean temperature by shape")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=9)
+        fig.tight_layout()
+        fig.savefig(out / "temperatures.png", dpi=110)
+        print(f"  plot: {out / 'temperatures.png'}")
     return 0
 
 

@@ -489,7 +489,14 @@ ElementContact polyhedron_superquadric(const Element& p, const Element& s, const
         }
         sep->setZero();
     }
-    const geometry::ConvexContact cc = geometry::ccd_contact(pp, ps, false);
+    geometry::ConvexContact cc = geometry::ccd_contact(pp, ps, false);
+    if (!cc.converged) {
+        // libccd's EPA stopped without an answer (its support budget ran out, ccd_adapter.cpp):
+        // MPR gives a penetration direction and depth that are not minimal but close to it, and
+        // the depth along that direction is measured exactly below. Counted as a fallback.
+        cc = geometry::ccd_contact(pp, ps, true);
+        out.fell_back = cc.converged;
+    }
     out.converged = cc.converged;
     if (!cc.converged || !cc.touching) {
         return out;

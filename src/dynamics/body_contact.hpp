@@ -67,10 +67,11 @@ struct BodyContactEntry {
 
 /// Result of one element-element or element-wall geometry query, world frame.
 struct ElementContact {
-    bool touching = false;       ///< overlap > 0
-    bool converged = true;       ///< narrow phase converged (false: failure, contact skipped)
-    bool fell_back = false;      ///< Newton failed and GJK/EPA answered instead
-    double overlap = 0.0;        ///< (m)
+    bool touching = false;  ///< overlap > 0
+    bool converged = true;  ///< narrow phase converged (false: failure, contact skipped)
+    bool fell_back = false; ///< the first method failed and a second answered (Newton ->
+                            ///< GJK/EPA, or GJK/EPA -> MPR for a polyhedron and a superquadric)
+    double overlap = 0.0;   ///< (m)
     Vec3 normal = Vec3::UnitX(); ///< unit, from b (or the wall) to a
     Vec3 point = Vec3::Zero();   ///< contact point (m)
     double r_eff = 0.0;          ///< effective radius for the law (m), clamped (see .cpp)
@@ -80,7 +81,7 @@ struct ElementContact {
 /// Narrow-phase counters of a run (summed over the steps).
 struct NarrowPhaseCounters {
     long calls = 0;     ///< superquadric element queries
-    long fallbacks = 0; ///< Newton did not converge, GJK/EPA answered
+    long fallbacks = 0; ///< the first method did not converge, a second answered (see fell_back)
     long failures = 0;  ///< no method converged: the contact was skipped for that step
 };
 

@@ -236,6 +236,34 @@ template <class A, class B> double brute_mtd(const A& a, const B& b, Vec3& best_
 
 } // namespace
 
+TEST(Polyhedra, CubeOnAnEllipsoidWhereEpaCyclesFallsBackToMpr) {
+    // The pose of tests/geometry's CcdContact.EpaThatWouldCycleStopsAndMprAnswers (a cube and a
+    // 1:2:3 ellipsoid of cases/hot_shapes where libccd's EPA cycles): the element contact must be
+    // answered by MPR, flagged as a fallback, with the overlap measured along MPR's normal.
+    const geometry::ShapeTemplate cube = shape("cube");
+    const geometry::ShapeTemplate ell = shape("ellipsoid_123");
+    const geometry::PolyhedronFeatures f =
+        geometry::polyhedron_features(std::get<geometry::ConvexPolyhedron>(cube.shape));
+    std::vector<Element> e;
+    append_elements(&cube, &f,
+                    Vec3(-0x1.10edbc65958c3p-8, 0x1.9a7a89ba1070cp-7, 0x1.2724b60aecacap-10),
+                    Quat(-0x1.f6890899daa41p-1, 0x1.5f2558bf2684fp-24, -0x1.08b91d53681c6p-17,
+                         -0x1.87f709e2434bbp-3),
+                    cube.bounding_radius(), e);
+    append_elements(&ell, nullptr,
+                    Vec3(-0x1.fc9e6946e4ec1p-8, 0x1.5589800c84051p-7, 0x1.a1de5b7c483cp-10),
+                    Quat(-0x1.ac282ef99da12p-2, 0x1.60b2b25439d6ap-1, -0x1.034529d699981p-3,
+                         0x1.282bbe5bec728p-1),
+                    ell.bounding_radius(), e);
+    ASSERT_EQ(e.size(), 2U);
+    const ElementContact c = element_contact(e[0], e[1], NarrowPhase::newton, nullptr);
+    EXPECT_TRUE(c.converged);
+    EXPECT_TRUE(c.fell_back);
+    ASSERT_TRUE(c.touching);
+    EXPECT_GT(c.overlap, 0.0);
+    EXPECT_LT(c.overlap, 1e-5); // a light touch: 3.0e-6 m measured
+}
+
 TEST(Polyhedra, CubeOnASuperballMatchesBruteForce) {
     // Random poses of a cube pressed into a superball (exponent 4): element_contact's overlap and
     // normal (libccd GJK/EPA, overlap re-evaluated along EPA's normal) against the brute-force

@@ -572,3 +572,37 @@ TEST(SeparatingAxis, PortalSearchOnSuperquadricsAgreesWithTheNarrowPhase) {
 }
 
 } // namespace
+
+namespace {
+
+TEST(CcdContact, EpaThatWouldCycleStopsAndMprAnswers) {
+    // A cube and a 1:2:3 ellipsoid of cases/hot_shapes at the step where libccd's EPA cycled for
+    // ever before the support budget (ccd_adapter.cpp; danfis/libccd issue #7): poses as recorded
+    // in that run (hex floats). GJK/EPA must now return, flagged as not converged, and MPR (the
+    // fallback of the polyhedron-superquadric contact) must give a touching contact whose depth
+    // along its normal is positive and close to its own.
+    const g::PolyhedronFeatures cube = load("cube");
+    g::Superquadric ell;
+    ell.half_axes = Vec3(0x1.0624dd2f1a9fcp-10, 0x1.0624dd2f1a9fcp-9, 0x1.89374bc6a7efap-9);
+    ell.e1 = ell.e2 = 1.0;
+    const g::PosedPolyhedron a{
+        &cube, Vec3(-0x1.10edbc65958c3p-8, 0x1.9a7a89ba1070cp-7, 0x1.2724b60aecacap-10),
+        Quat(-0x1.f6890899daa41p-1, 0x1.5f2558bf2684fp-24, -0x1.08b91d53681c6p-17,
+             -0x1.87f709e2434bbp-3)};
+    const g::PosedSuperquadric b{
+        &ell, Vec3(-0x1.fc9e6946e4ec1p-8, 0x1.5589800c84051p-7, 0x1.a1de5b7c483cp-10),
+        Quat(-0x1.ac282ef99da12p-2, 0x1.60b2b25439d6ap-1, -0x1.034529d699981p-3,
+             0x1.282bbe5bec728p-1)};
+    const g::ConvexContact epa = g::ccd_contact(a, b, false);
+    EXPECT_FALSE(epa.converged);
+    const g::ConvexContact mpr = g::ccd_contact(a, b, true);
+    ASSERT_TRUE(mpr.converged);
+    ASSERT_TRUE(mpr.touching);
+    const double along =
+        b.support(mpr.normal).dot(mpr.normal) - a.support(-mpr.normal).dot(mpr.normal);
+    EXPECT_GT(along, 0.0);
+    EXPECT_NEAR(along, mpr.depth, 1e-3 * edge_of_cube(cube)); // MPR's depth: not minimal, close
+    std::printf("  MPR depth %.4e m (along its normal %.4e m)\n", mpr.depth, along);
+}
+
+} // namespace
