@@ -78,6 +78,10 @@ set -e
 echo "$msg" | grep -q "simulation.time_step: .*must be below the Rayleigh step" \
     || { echo "unexpected check message: $msg"; exit 1; }
 "$kiln" check "$out/heat.toml" > /dev/null || { echo "check refused the good heat case"; exit 1; }
+# Every shipped case reads (shape templates, meshes and monitor names included).
+for c in "$here"/../../cases/*/case.toml; do
+    "$kiln" check "$c" > /dev/null || { echo "kiln check refused the shipped case $c"; exit 1; }
+done
 
 set +e
 msg=$("$kiln" check "$here/bad.toml" 2>&1)
