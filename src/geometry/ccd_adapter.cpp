@@ -72,7 +72,8 @@ constexpr double kTolerance = 1e-10; // relative to the length scale of the quer
 /// GJK + EPA (use_mpr = false) or MPR of bodies a and b in coordinates (x - origin) / scale.
 /// Normal from b to a, world frame; the point is the midpoint of the deepest points along it.
 template <class A, class B>
-ConvexContact query(const A& a, const B& b, const Vec3& origin, double scale, bool use_mpr) {
+ConvexContact query(const A& a, const B& b, const Vec3& origin, double scale, bool use_mpr,
+                    double epa_tolerance = kEpaTolerance) {
     SupportBudget budget;
     const CcdBody<A> ca{&a, origin, scale, &budget};
     const CcdBody<B> cb{&b, origin, scale, &budget};
@@ -83,7 +84,7 @@ ConvexContact query(const A& a, const B& b, const Vec3& origin, double scale, bo
     ccd.center1 = ccd_centre<A>;
     ccd.center2 = ccd_centre<B>;
     ccd.max_iterations = kMaxIterations;
-    ccd.epa_tolerance = kEpaTolerance;
+    ccd.epa_tolerance = epa_tolerance;
     ccd.mpr_tolerance = kTolerance;
     ccd.dist_tolerance = kTolerance;
     ccd_real_t depth = 0;
@@ -111,8 +112,11 @@ ConvexContact query(const A& a, const B& b, const Vec3& origin, double scale, bo
 }
 
 /// Shift to the midpoint of the centres, scale by the sum of the length scales.
-template <class A, class B> ConvexContact centred_query(const A& a, const B& b, bool use_mpr) {
-    return query(a, b, 0.5 * (a.x + b.x), a.length_scale() + b.length_scale(), use_mpr);
+template <class A, class B>
+ConvexContact centred_query(const A& a, const B& b, bool use_mpr,
+                            double epa_tolerance = kEpaTolerance) {
+    return query(a, b, 0.5 * (a.x + b.x), a.length_scale() + b.length_scale(), use_mpr,
+                 epa_tolerance);
 }
 
 } // namespace
@@ -122,7 +126,7 @@ ConvexContact ccd_contact(const PosedSuperquadric& a, const PosedSuperquadric& b
 }
 
 ConvexContact ccd_contact(const PosedPolyhedron& a, const PosedPolyhedron& b, bool use_mpr) {
-    return centred_query(a, b, use_mpr);
+    return centred_query(a, b, use_mpr, kPolytopeEpaTolerance);
 }
 
 ConvexContact ccd_contact(const PosedPolyhedron& a, const PosedSuperquadric& b, bool use_mpr) {
