@@ -474,6 +474,8 @@ void read_heat(Section& root, CaseSpec& c, const toml::table& doc) {
                             "allowed: \"cg\", \"bicgstab\"");
     }
     h.solver.tolerance = s.real("tolerance", 1e-10, Range{0.0, 1.0, false, false}, "-");
+    h.extrapolated_guess =
+        s.text("initial_guess", "extrapolated", {"extrapolated", "last"}) == "extrapolated";
     h.solver.max_iterations = static_cast<int>(s.integer("max_iterations", 1000, 1, 1'000'000));
     h.ambient_temperature = s.real("ambient_temperature", 293.15, positive(), "K");
     h.heat_transfer_coefficient =

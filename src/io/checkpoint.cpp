@@ -166,6 +166,9 @@ constexpr char heat_magic[8] = {'K', 'I', 'L', 'N', 'H', 'E', 'A', 'T'};
 constexpr char onset_magic[8] = {'K', 'I', 'L', 'N', 'I', 'M', 'P', '1'};
 /// Tag of the optional grid orientations of resolved spheres (ThermalState::orientations), last.
 constexpr char orientation_magic[8] = {'K', 'I', 'L', 'N', 'O', 'R', 'I', '1'};
+/// Tag of the optional resolved fields one thermal step earlier (ThermalState::previous_fields),
+/// after the orientations.
+constexpr char previous_magic[8] = {'K', 'I', 'L', 'N', 'P', 'R', 'V', '1'};
 /// Tag of the same list before impacts carried body-frame contacts (not readable any more).
 constexpr char old_onset_magic[8] = {'K', 'I', 'L', 'N', 'O', 'N', 'S', 'T'};
 
@@ -196,7 +199,7 @@ std::optional<thermal::ThermalState> read_checkpoint_heat(const std::filesystem:
     thermal::ThermalState t;
     heat_fields(in, t);
     // Optional, in this order: contact onsets not yet exchanged (collision conduction), the
-    // grid orientations of resolved spheres.
+    // grid orientations of resolved spheres, the fields one thermal step earlier.
     char o[sizeof onset_magic] = {};
     f.read(o, sizeof o);
     if (f && std::memcmp(o, onset_magic, sizeof onset_magic) == 0) {
@@ -209,6 +212,10 @@ std::optional<thermal::ThermalState> read_checkpoint_heat(const std::filesystem:
     }
     if (f && std::memcmp(o, orientation_magic, sizeof orientation_magic) == 0) {
         in.vec(t.orientations);
+        f.read(o, sizeof o);
+    }
+    if (f && std::memcmp(o, previous_magic, sizeof previous_magic) == 0) {
+        in.vec(t.previous_fields);
     }
     return t;
 }
@@ -247,6 +254,10 @@ void write_checkpoint(const std::filesystem::path& file, const dynamics::SystemS
             if (!copy.orientations.empty()) {
                 f.write(orientation_magic, sizeof orientation_magic);
                 out.vec(copy.orientations);
+            }
+            if (!copy.previous_fields.empty()) {
+                f.write(previous_magic, sizeof previous_magic);
+                out.vec(copy.previous_fields);
             }
         }
         if (!f) {

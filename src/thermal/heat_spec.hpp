@@ -43,9 +43,13 @@ struct MaterialHeat {
 
 /// The heat coupling of a run.
 struct HeatSpec {
-    bool enabled = false;                 ///< true when the case has a [heat] section
-    int step_multiple = 100;              ///< thermal step = step_multiple mechanical steps (-)
-    heat::SolverSettings solver;          ///< linear solver of resolved particles
+    bool enabled = false;        ///< true when the case has a [heat] section
+    int step_multiple = 100;     ///< thermal step = step_multiple mechanical steps (-)
+    heat::SolverSettings solver; ///< linear solver of resolved particles
+    /// Initial guess of the iterative solvers: extrapolated linearly in time from the last two
+    /// fields (2 T^n - T^{n-1}; keeps a second field per resolved particle, 8 bytes per cell)
+    /// when true, the last field when false. Unused by CHOLMOD.
+    bool extrapolated_guess = true;
     double ambient_temperature = 293.15;  ///< fluid temperature for convection (K)
     double heat_transfer_coefficient = 0; ///< mean h to the ambient (W/(m^2 K)); 0 = insulated
     bool stagnation = false; ///< distribute h around the stagnation point with the seed's f(theta)

@@ -140,6 +140,9 @@ std::vector<FieldView> ThermalSystem::fields(const dynamics::System& sys,
 ThermalState ThermalSystem::save_state() const {
     ThermalState s;
     s.fields = pool_.values();
+    if (keeps_previous()) {
+        s.previous_fields = previous_.values();
+    }
     s.lumped = lumped_;
     s.ids = slot_ids_;
     s.external_heat = external_heat_;
@@ -165,6 +168,21 @@ void ThermalSystem::restore_state(const ThermalState& s, const dynamics::System&
         const std::span<double> f = pool_.field(slot);
         std::copy_n(s.fields.begin() + static_cast<std::ptrdiff_t>(at), f.size(), f.begin());
         at += f.size();
+    }
+    if (keeps_previous()) {
+        // A checkpoint without them (written with the last-field guess, or before they were
+        // kept) restarts the extrapolation: the first guess is the field itself.
+        const std::vector<double>& prev = s.previous_fields.empty() ? s.fields : s.previous_fields;
+        if (prev.size() != s.fields.size()) {
+            throw InputError("heat: the checkpoint's previous temperatures do not fit its "
+                             "temperatures; the file is damaged");
+        }
+        at = 0;
+        for (int slot = 0; slot < previous_.size(); ++slot) {
+            const std::span<double> f = previous_.field(slot);
+            std::copy_n(prev.begin() + static_cast<std::ptrdiff_t>(at), f.size(), f.begin());
+            at += f.size();
+        }
     }
     lumped_ = s.lumped;
     external_heat_ = s.external_heat;
@@ -193,6 +211,11 @@ void ThermalSystem::set_temperature(std::int64_t id, double t) {
     }
     const std::span<double> f = pool_.field(r.slot);
     std::fill(f.begin(), f.end(), t);
+    if (keeps_previous()) {
+        // No extrapolation across a temperature set from outside.
+        const std::span<double> prev = previous_.field(r.slot);
+        std::fill(prev.begin(), prev.end(), t);
+    }
 }
 
 std::vector<std::string> ThermalSystem::describe() const {

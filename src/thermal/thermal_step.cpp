@@ -192,7 +192,9 @@ void ThermalSystem::solve_resolved(const dynamics::System& sys, int substeps, do
         load.heat_rate = std::span<const double>(face_rate_.data() +
                                                      face_offset_[static_cast<std::size_t>(slot)],
                                                  t.grid->boundary.size());
-        reports_[static_cast<std::size_t>(slot)] = op.step(pool_.field(slot), load);
+        reports_[static_cast<std::size_t>(slot)] =
+            op.step(pool_.field(slot), load,
+                    keeps_previous() ? previous_.field(slot) : std::span<double>{});
     }
     for (int slot = 0; slot < n_slots; ++slot) {
         const heat::StepReport& rep = reports_[static_cast<std::size_t>(slot)];

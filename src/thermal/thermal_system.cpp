@@ -290,6 +290,9 @@ void ThermalSystem::sync(const dynamics::System& sys) {
             r.templ = template_for(sys, i);
             const heat::ThermalGrid& g = *templates_[static_cast<std::size_t>(r.templ)]->grid;
             r.slot = pool_.add(g.size(), t0);
+            if (keeps_previous()) {
+                previous_.add(g.size(), t0); // the same slot: both pools grow together
+            }
             pool_template_.push_back(r.templ);
             pool_q_.push_back(Quat::Identity());
             turning_spheres_ = turning_spheres_ || (spec_.sphere_rotation && p.shape[i] < 0);

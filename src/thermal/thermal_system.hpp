@@ -74,6 +74,9 @@ struct ThermalState {
     /// Orientation (body -> world) of every pool slot's grid as w, x, y, z: resolved spheres'
     /// own (sphere_rotation), identity for bodies (theirs is the System's). Empty: all identity.
     std::vector<double> orientations;
+    /// Resolved fields one thermal step earlier (K), the layout of `fields`, kept for the
+    /// extrapolated initial guess (HeatSpec::extrapolated_guess). Empty: none kept.
+    std::vector<double> previous_fields;
 };
 
 /// Per-particle temperatures for output, by particle index of the store (K).
@@ -275,6 +278,11 @@ class ThermalSystem {
     std::vector<Record> by_id_;      // indexed by particle id
     std::vector<double> radius_;     // by particle id (m)
     heat::TemperaturePool pool_;
+    heat::TemperaturePool previous_; // pool_ one thermal step earlier (extrapolated_guess)
+    /// True when resolved solves start from the extrapolated guess (so previous_ is kept).
+    [[nodiscard]] bool keeps_previous() const {
+        return spec_.extrapolated_guess && spec_.solver.kind != heat::SolverKind::cholmod;
+    }
     std::vector<int> pool_template_;        // template of each pool slot
     std::vector<Quat> pool_q_;              // grid orientation of each pool slot (spheres)
     bool turning_spheres_ = false;          // some resolved sphere's grid turns (sphere_rotation)

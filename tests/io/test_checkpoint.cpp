@@ -117,6 +117,8 @@ TEST(Checkpoint, RestartContinuesTemperaturesBitForBit) {
     const thermal::ThermalState saved = ha.save_state();
     // The spheres' grids have turned with their spin (sphere_rotation): the restart needs them.
     EXPECT_EQ(saved.orientations.size(), 4 * a.particles().size());
+    // The extrapolated guess's second field (the default) goes into the file too.
+    EXPECT_EQ(saved.previous_fields.size(), saved.fields.size());
     write_checkpoint(file, a.save_state(), &saved);
     advance(a, ha, 3000);
     dynamics::System b(pour());
@@ -124,6 +126,7 @@ TEST(Checkpoint, RestartContinuesTemperaturesBitForBit) {
     b.restore_state(read_checkpoint(file));
     const auto restored = read_checkpoint_heat(file);
     ASSERT_TRUE(restored.has_value());
+    EXPECT_EQ(restored->previous_fields, saved.previous_fields);
     hb.restore_state(*restored, b);
     advance(b, hb, 3000);
     thermal::ParticleTemperatures ta;

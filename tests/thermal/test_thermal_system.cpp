@@ -404,6 +404,54 @@ TEST(ThermalSystem, OneAndTwoThreadsGiveTheSameTemperatures) {
     EXPECT_GT(one.second, 0.0); // the floor heated the bed
 }
 
+TEST(ThermalSystem, ExtrapolatedGuessGivesTheSameTemperaturesInFewerIterations) {
+    // The bed of the thread test heated by a hot floor, once with the extrapolated initial guess
+    // (the default) and once with the last field, both solved to a relative residual of 1e-12.
+    // The operator is close to C/dt at this thermal step (cell Fourier numbers << 1), so each
+    // solve's error is about the residual, 1e-12 of a temperature below 500 K, and backward
+    // Euler does not amplify it: after n solves (sub-steps) the two runs differ by at most
+    // n * 1e-12 * 500 K. The extrapolated guess must need fewer iterations.
+    constexpr double kTolerance = 1e-12;
+    const auto run = [](bool extrapolated) {
+        dynamics::System sys(threaded_bed(1));
+        HeatSpec h = heat_for(sys.spec(), heat::HeatModel::resolved, 2.0);
+        h.particle_temperature.clear();
+        h.materials[1].grid = GridKind::cartesian;
+        h.materials[1].cells_across = 5;
+        h.materials[1].initial_temperature = 350.0;
+        h.wall_temperature = {500.0, unset};
+        h.solver.tolerance = kTolerance;
+        h.step_multiple = 20;
+        h.extrapolated_guess = extrapolated;
+        ThermalSystem heat(h, sys);
+        for (int k = 0; k < 3000; ++k) {
+            sys.step();
+            heat.after_step(sys);
+        }
+        ParticleTemperatures t;
+        heat.particle_temperatures(sys, t);
+        return std::make_tuple(t.mean, heat.external_heat(), heat.counters().iterations,
+                               heat.save_state().previous_fields.size(),
+                               heat.counters().substeps);
+    };
+    const auto [t_ex, q_ex, it_ex, prev_ex, steps] = run(true);
+    const auto [t_last, q_last, it_last, prev_last, steps_last] = run(false);
+    ASSERT_EQ(steps, steps_last);
+    ASSERT_EQ(t_ex.size(), t_last.size());
+    double worst = 0.0;
+    for (std::size_t i = 0; i < t_ex.size(); ++i) {
+        worst = std::max(worst, std::abs(t_ex[i] - t_last[i]));
+    }
+    EXPECT_LT(worst, static_cast<double>(steps) * kTolerance * 500.0);
+    EXPECT_NEAR(q_ex, q_last, 1e-6 * std::abs(q_last));
+    EXPECT_GT(q_last, 0.0); // the floor heated the bed
+    EXPECT_LT(it_ex, it_last);
+    EXPECT_GT(prev_ex, 0U); // the second field is kept (and checkpointed) only when used
+    EXPECT_EQ(prev_last, 0U);
+    std::printf("largest difference %.3g K; iterations %ld (extrapolated) and %ld (last field)\n",
+                worst, it_ex, it_last);
+}
+
 /// A stack of two spheres of radius r on a 600 K floor, convection to 250 K with coefficient h,
 /// conductivities k_low (bottom) and k_high (top): every exchange path at once.
 struct Extreme {
