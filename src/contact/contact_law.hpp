@@ -126,6 +126,16 @@ inline V4 vabs(V4 a) {
 template <class T> T vmax(T a, T b) {
     return select(a < b, b, a);
 }
+/// True when the mask m is set (one contact).
+inline bool any(bool m) {
+    return m;
+}
+#ifdef __AVX__
+/// True when the mask m is set in any lane (four contacts).
+template <class M> bool any(M m) {
+    return _mm256_movemask_pd(_mm256_castsi256_pd(reinterpret_cast<__m256i>(m))) != 0;
+}
+#endif
 
 } // namespace lanes
 
@@ -201,12 +211,23 @@ template <class T> struct ContactLanes {
     T f[3], ti[3], tj[3], fn, energy;                // results
 };
 
-/// Evaluates the law on c; written without branches, so that it runs on vector lanes and a loop
-/// over the contacts of a block vectorises. This is the single implementation of the laws above;
-/// `evaluate_block` and `evaluate` wrap it. `fn_floor` is 0 when the normal force is clamped, -inf
-/// otherwise; `rolling` is 1 with rolling resistance, 0 without (scalars, so the loop carries no
-/// flag loads).
-template <class Law, class T>
+/// Variants of evaluate_lanes chosen at compile time; every variant gives the same bits.
+enum LaneVariant : unsigned {
+    /// Branch-free (the loops over blocks vectorise only so).
+    branch_free = 0,
+    /// No rolling resistance term: only when `rolling` is 0 (the term is then +-0).
+    without_rolling = 1,
+    /// The Coulomb cap (a square root and two divisions) is computed only when a lane slides: one
+    /// branch per call, for the register path, where the divider is the busiest unit.
+    cap_when_sliding = 2,
+};
+
+/// Evaluates the law on c; written without branches (variant `branch_free`), so that it runs on
+/// vector lanes and a loop over the contacts of a block vectorises. This is the single
+/// implementation of the laws above; `evaluate_block` and `evaluate` wrap it. `fn_floor` is 0 when
+/// the normal force is clamped, -inf otherwise; `rolling` is 1 with rolling resistance, 0 without
+/// (scalars, so the loop carries no flag loads).
+template <unsigned variant = branch_free, class Law, class T>
 [[gnu::always_inline]] inline void evaluate_lanes(const Law& law, double fn_floor, double rolling,
                                                   ContactLanes<T>& c, double dt) {
     using lanes::select;
@@ -261,15 +282,25 @@ template <class Law, class T>
     const T cap = c.mu * vabs(fn);
     const auto slide = ftsq > cap * cap;
     const T on = select(c.mu > zero, one, zero);
-    const T capped = cap / vsqrt(select(ftsq > zero, ftsq, one));
-    const T scale = on * select(slide, capped, one);
-    ft0 *= scale;
-    ft1 *= scale;
-    ft2 *= scale;
-    const T inv_kt = 1.0 / k.kt;
-    c.s[0] = on * select(slide, -ft0 * inv_kt, s0);
-    c.s[1] = on * select(slide, -ft1 * inv_kt, s1);
-    c.s[2] = on * select(slide, -ft2 * inv_kt, s2);
+    if ((variant & cap_when_sliding) != 0 && !lanes::any(slide)) {
+        // What the selects below give when no lane slides (scale = on), without the divider.
+        ft0 *= on;
+        ft1 *= on;
+        ft2 *= on;
+        c.s[0] = on * s0;
+        c.s[1] = on * s1;
+        c.s[2] = on * s2;
+    } else {
+        const T capped = cap / vsqrt(select(ftsq > zero, ftsq, one));
+        const T scale = on * select(slide, capped, one);
+        ft0 *= scale;
+        ft1 *= scale;
+        ft2 *= scale;
+        const T inv_kt = 1.0 / k.kt;
+        c.s[0] = on * select(slide, -ft0 * inv_kt, s0);
+        c.s[1] = on * select(slide, -ft1 * inv_kt, s1);
+        c.s[2] = on * select(slide, -ft2 * inv_kt, s2);
+    }
     c.f[0] = fn * n0 + ft0;
     c.f[1] = fn * n1 + ft1;
     c.f[2] = fn * n2 + ft2;
@@ -277,6 +308,17 @@ template <class Law, class T>
     const T nxf1 = n2 * ft0 - n0 * ft2;
     const T nxf2 = n0 * ft1 - n1 * ft0;
 
+    c.fn = fn;
+    c.energy = k.energy;
+    if constexpr ((variant & without_rolling) != 0) {
+        c.ti[0] = -c.lever_i * nxf0;
+        c.ti[1] = -c.lever_i * nxf1;
+        c.ti[2] = -c.lever_i * nxf2;
+        c.tj[0] = -c.lever_j * nxf0;
+        c.tj[1] = -c.lever_j * nxf1;
+        c.tj[2] = -c.lever_j * nxf2;
+        return;
+    }
     // Rolling resistance, constant directional torque.
     const T wr0 = c.wi[0] - c.wj[0];
     const T wr1 = c.wi[1] - c.wj[1];
@@ -291,8 +333,6 @@ template <class Law, class T>
     c.tj[0] = -c.lever_j * nxf0 - mr * wr0;
     c.tj[1] = -c.lever_j * nxf1 - mr * wr1;
     c.tj[2] = -c.lever_j * nxf2 - mr * wr2;
-    c.fn = fn;
-    c.energy = k.energy;
 }
 
 /// Evaluates contact b of a block (evaluate_lanes on one contact); a loop over b vectorises.

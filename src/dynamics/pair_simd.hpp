@@ -102,11 +102,12 @@ struct PairArrays {
 /// or written to rows[9 (first_row + a)] (several threads). Pair properties from `pairs` by the
 /// particles' `material`. Returns how many entries it took (a multiple of four); energy and
 /// max_ratio accumulate in entry order.
-template <class Law, bool direct>
-std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
-                           double fn_floor, double rolling, double dt, const PairArrays& a,
-                           const std::uint32_t* active, std::size_t n, std::size_t first_row,
-                           double& energy, double& max_ratio) {
+/// `variant` selects the law's contact::LaneVariant (without_rolling only when rolling is 0).
+template <unsigned variant, class Law, bool direct>
+std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std::int32_t* material,
+                              double fn_floor, double rolling, double dt, const PairArrays& a,
+                              const std::uint32_t* active, std::size_t n, std::size_t first_row,
+                              double& energy, double& max_ratio) {
     constexpr int W = 4;
     using V = contact::lanes::V4;
     using contact::lanes::select;
@@ -120,6 +121,10 @@ std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::in
         c.mu = contact::lanes::splat(pp.friction, c.e_star);
         c.mu_roll = contact::lanes::splat(pp.rolling_friction, c.e_star);
     }
+    // Largest overlap / (2 min(ri, rj)) per lane, kept as a fraction (top / bottom) compared by
+    // cross products, so that the divider (the busiest unit) does one division per lane per call.
+    V top = contact::lanes::splat(0.0, c.e_star);
+    V bottom = contact::lanes::splat(1.0, c.e_star);
     std::size_t g = 0;
     for (; g + W <= n; g += W) {
         std::uint32_t ks[W];
@@ -179,8 +184,11 @@ std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::in
         c.m_eff = mi * mj * rsum * inv_rm;
         c.lever_i = ri - 0.5 * overlap;
         c.lever_j = rj - 0.5 * overlap;
-        const V ratio = overlap / (2.0 * select(rj < ri, rj, ri)); // std::min(ri, rj)
-        contact::evaluate_lanes(law, fn_floor, rolling, c, dt);
+        const V diameter = 2.0 * select(rj < ri, rj, ri); // 2 std::min(ri, rj)
+        const auto larger = overlap * bottom > top * diameter;
+        top = select(larger, overlap, top);
+        bottom = select(larger, diameter, bottom);
+        contact::evaluate_lanes<variant>(law, fn_floor, rolling, c, dt);
 
         const RowsXY f = rows_xy(c.f[0], c.f[1]);
         const RowsXY ti = rows_xy(c.ti[0], c.ti[1]);
@@ -203,10 +211,30 @@ std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::in
             }
             set(a.shear[ks[l]], s.r[l], c.s[2][l]);
             energy += c.energy[l];
-            max_ratio = std::max(max_ratio, ratio[l]);
         }
     }
+    for (int l = 0; l < W; ++l) {
+        max_ratio = std::max(max_ratio, top[l] / bottom[l]);
+    }
     return g;
+}
+
+/// contact_groups_as with the variant of the law that gives the same bits with fewer square roots
+/// and divisions: the Coulomb cap only when a lane slides, no rolling term when there is none.
+template <class Law, bool direct>
+std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
+                           double fn_floor, double rolling, double dt, const PairArrays& a,
+                           const std::uint32_t* active, std::size_t n, std::size_t first_row,
+                           double& energy, double& max_ratio) {
+    using contact::cap_when_sliding;
+    using contact::without_rolling;
+    if (rolling == 0.0) {
+        return contact_groups_as<cap_when_sliding | without_rolling, Law, direct>(
+            law, pairs, material, fn_floor, rolling, dt, a, active, n, first_row, energy,
+            max_ratio);
+    }
+    return contact_groups_as<cap_when_sliding, Law, direct>(
+        law, pairs, material, fn_floor, rolling, dt, a, active, n, first_row, energy, max_ratio);
 }
 #endif
 
