@@ -12,6 +12,7 @@
 #include "core/types.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #ifdef __AVX2__
@@ -19,6 +20,19 @@
 #endif
 
 namespace kiln::dynamics::simd {
+
+/// |a - b|^2 (m^2, any common frame) as the pair loop's touch test takes it: explicit
+/// multiply-adds, so that the one-entry and the four-entry filters give the same bits.
+inline double squared_distance(const Vec3& a, const Vec3& b) {
+    const double d0 = a[0] - b[0];
+    const double d1 = a[1] - b[1];
+    const double d2 = a[2] - b[2];
+#ifdef __FMA__
+    return std::fma(d2, d2, std::fma(d1, d1, d0 * d0));
+#else
+    return d2 * d2 + (d1 * d1 + d0 * d0);
+#endif
+}
 
 #ifdef __AVX2__
 /// Components x, y, z of four records, one register each (lane l = record l).
@@ -102,6 +116,58 @@ struct PairArrays {
 /// or written to rows[9 (first_row + a)] (several threads). Pair properties from `pairs` by the
 /// particles' `material`. Returns how many entries it took (a multiple of four); energy and
 /// max_ratio accumulate in entry order.
+#if defined(__AVX2__) && defined(__FMA__)
+/// The contact filter of System::pair_chunk four list entries at a time, from `begin` while four
+/// remain before `end`: which entries touch (squared distance below the squared radius sum, as
+/// squared_distance), their indices appended to active[n_active..] without a branch, the histories
+/// of the others cleared (bit mask); with `rows` (several threads) the row of each entry, `begin` +
+/// its place among the touching ones or `zero_row`. Returns the first entry not taken.
+template <bool with_rows>
+std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t end,
+                             std::uint32_t* active, std::size_t& n_active, std::uint32_t* rows,
+                             std::uint32_t zero_row) {
+    static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 records are packed");
+    std::size_t n = n_active;
+    std::size_t k = begin;
+    for (; k + 4 <= end; k += 4) {
+        const std::uint32_t* is = a.owner + k;
+        const std::uint32_t* js = a.nb + k;
+        const Columns xi = columns(a.x, is);
+        const Columns xj = columns(a.x, js);
+        const __m256d ri =
+            _mm256_setr_pd(a.radius[is[0]], a.radius[is[1]], a.radius[is[2]], a.radius[is[3]]);
+        const __m256d rj =
+            _mm256_setr_pd(a.radius[js[0]], a.radius[js[1]], a.radius[js[2]], a.radius[js[3]]);
+        const __m256d d0 = _mm256_sub_pd(xi.c[0], xj.c[0]);
+        const __m256d d1 = _mm256_sub_pd(xi.c[1], xj.c[1]);
+        const __m256d d2 = _mm256_sub_pd(xi.c[2], xj.c[2]);
+        const __m256d dist2 =
+            _mm256_fmadd_pd(d2, d2, _mm256_fmadd_pd(d1, d1, _mm256_mul_pd(d0, d0)));
+        const __m256d rsum = _mm256_add_pd(ri, rj);
+        const __m256d touch = _mm256_cmp_pd(dist2, _mm256_mul_pd(rsum, rsum), _CMP_LT_OQ);
+        // Histories of the four entries (12 doubles): each lane's mask spread over its 3
+        // components.
+        double* h = a.shear[k].data();
+        _mm256_storeu_pd(h, _mm256_and_pd(_mm256_loadu_pd(h), _mm256_permute4x64_pd(touch, 0x40)));
+        _mm256_storeu_pd(h + 4,
+                         _mm256_and_pd(_mm256_loadu_pd(h + 4), _mm256_permute4x64_pd(touch, 0xA5)));
+        _mm256_storeu_pd(h + 8,
+                         _mm256_and_pd(_mm256_loadu_pd(h + 8), _mm256_permute4x64_pd(touch, 0xFE)));
+        const auto m = static_cast<unsigned>(_mm256_movemask_pd(touch));
+        for (unsigned l = 0; l < 4; ++l) {
+            const unsigned t = (m >> l) & 1U;
+            active[n] = static_cast<std::uint32_t>(k + l);
+            if constexpr (with_rows) {
+                rows[k + l] = t != 0 ? static_cast<std::uint32_t>(begin + n) : zero_row;
+            }
+            n += t;
+        }
+    }
+    n_active = n;
+    return k;
+}
+#endif
+
 /// `variant` selects the law's contact::LaneVariant (without_rolling only when rolling is 0).
 template <unsigned variant, class Law, bool direct>
 std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std::int32_t* material,
