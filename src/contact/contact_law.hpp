@@ -149,21 +149,26 @@ template <class T> struct Stiffness {
     T energy; // elastic energy of the normal spring (J)
 };
 
-template <class T>
+// With `shared_root`, g_t = g_n sqrt(S_t / S_n) = g_n damping_ratio (one square root fewer).
+template <bool shared_root, class T>
 inline Stiffness<T> stiffness(const HertzMindlin&, T e_star, T g_star, T beta, T r_eff, T m_eff,
-                              T overlap) {
+                              T overlap, T damping_ratio) {
     using lanes::vsqrt;
     const T a = vsqrt(r_eff * overlap); // contact radius (m)
     const T sn = 2.0 * e_star * a;
     const T st = 8.0 * g_star * a;
     constexpr double k56 = 1.8257418583505538; // 2 sqrt(5/6)
     const T kn = 2.0 / 3.0 * sn;               // 4/3 E* sqrt(R* delta)
-    return {kn, -k56 * beta * vsqrt(sn * m_eff), st, -k56 * beta * vsqrt(st * m_eff),
-            0.4 * kn * overlap * overlap};
+    const T gn = -k56 * beta * vsqrt(sn * m_eff);
+    if constexpr (shared_root) {
+        return {kn, gn, st, gn * damping_ratio, 0.4 * kn * overlap * overlap};
+    }
+    return {kn, gn, st, -k56 * beta * vsqrt(st * m_eff), 0.4 * kn * overlap * overlap};
 }
 
-template <class T>
-inline Stiffness<T> stiffness(const LinearSpringDashpot& law, T, T, T beta, T, T m_eff, T overlap) {
+template <bool shared_root, class T>
+inline Stiffness<T> stiffness(const LinearSpringDashpot& law, T, T, T beta, T, T m_eff, T overlap,
+                              T) {
     using lanes::splat;
     return {splat(law.stiffness, beta), -2.0 * beta * lanes::vsqrt(m_eff * law.stiffness),
             splat(law.tangential_ratio * law.stiffness, beta), splat(0.0, beta),
@@ -207,11 +212,12 @@ template <class T> struct ContactLanes {
     T n[3], overlap, r_eff, m_eff, lever_i, lever_j; // geometry
     T v[3], wi[3], wj[3];                            // kinematics
     T e_star, g_star, beta, mu, mu_roll;             // pair properties
-    T s[3];                                          // history, in/out
-    T f[3], ti[3], tj[3], fn, energy;                // results
+    T damping_ratio; // sqrt(4 G*/E*), g_t / g_n of Hertz-Mindlin; read by `shared_damping_root`
+    T s[3];          // history, in/out
+    T f[3], ti[3], tj[3], fn, energy; // results
 };
 
-/// Variants of evaluate_lanes chosen at compile time; every variant gives the same bits.
+/// Variants of evaluate_lanes chosen at compile time.
 enum LaneVariant : unsigned {
     /// Branch-free (the loops over blocks vectorise only so).
     branch_free = 0,
@@ -220,6 +226,9 @@ enum LaneVariant : unsigned {
     /// The Coulomb cap (a square root and two divisions) is computed only when a lane slides: one
     /// branch per call, for the register path, where the divider is the busiest unit.
     cap_when_sliding = 2,
+    /// Hertz-Mindlin's tangential damping from the normal one times `damping_ratio` (set by the
+    /// caller): one square root fewer, other round-off (not the same bits as the others).
+    shared_damping_root = 4,
 };
 
 /// Evaluates the law on c; written without branches (variant `branch_free`), so that it runs on
@@ -235,8 +244,8 @@ template <unsigned variant = branch_free, class Law, class T>
     using lanes::vsqrt;
     const T zero = lanes::splat(0.0, c.overlap);
     const T one = lanes::splat(1.0, c.overlap);
-    const detail::Stiffness<T> k =
-        detail::stiffness(law, c.e_star, c.g_star, c.beta, c.r_eff, c.m_eff, c.overlap);
+    const detail::Stiffness<T> k = detail::stiffness<(variant & shared_damping_root) != 0>(
+        law, c.e_star, c.g_star, c.beta, c.r_eff, c.m_eff, c.overlap, c.damping_ratio);
     const T n0 = c.n[0];
     const T n1 = c.n[1];
     const T n2 = c.n[2];
@@ -340,6 +349,7 @@ template <class Law, std::size_t B>
 [[gnu::always_inline]] inline void evaluate_block(const Law& law, double fn_floor, double rolling,
                                                   ContactBlock<B>& c, std::size_t b, double dt) {
     ContactLanes<double> l;
+    l.damping_ratio = 0.0; // not read by this variant
     for (int q = 0; q < 3; ++q) {
         l.n[q] = c.n[q][b];
         l.v[q] = c.v[q][b];

@@ -186,6 +186,8 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
         c.beta = contact::lanes::splat(pp.beta, c.e_star);
         c.mu = contact::lanes::splat(pp.friction, c.e_star);
         c.mu_roll = contact::lanes::splat(pp.rolling_friction, c.e_star);
+        c.damping_ratio = contact::lanes::splat(
+            std::sqrt(4.0 * pp.effective_shear / pp.effective_modulus), c.e_star);
     }
     // Largest overlap / (2 min(ri, rj)) per lane, kept as a fraction (top / bottom) compared by
     // cross products, so that the divider (the busiest unit) does one division per lane per call.
@@ -285,22 +287,34 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
     return g;
 }
 
-/// contact_groups_as with the variant of the law that gives the same bits with fewer square roots
-/// and divisions: the Coulomb cap only when a lane slides, no rolling term when there is none.
+/// contact_groups_as with the variant of the law that has the fewest square roots and divisions:
+/// the Coulomb cap only when a lane slides, no rolling term when there is none (both the same bits)
+/// and, with one material pair, the tangential damping from the normal one (other round-off).
 template <class Law, bool direct>
 std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
                            double fn_floor, double rolling, double dt, const PairArrays& a,
                            const std::uint32_t* active, std::size_t n, std::size_t first_row,
                            double& energy, double& max_ratio) {
     using contact::cap_when_sliding;
+    using contact::shared_damping_root;
     using contact::without_rolling;
-    if (rolling == 0.0) {
-        return contact_groups_as<cap_when_sliding | without_rolling, Law, direct>(
-            law, pairs, material, fn_floor, rolling, dt, a, active, n, first_row, energy,
-            max_ratio);
+    constexpr unsigned v = cap_when_sliding;
+    constexpr unsigned s = shared_damping_root;
+    constexpr unsigned r = without_rolling;
+    if (pairs.size() == 1) {
+        return rolling == 0.0
+                   ? contact_groups_as<v | s | r, Law, direct>(law, pairs, material, fn_floor,
+                                                               rolling, dt, a, active, n, first_row,
+                                                               energy, max_ratio)
+                   : contact_groups_as<v | s, Law, direct>(law, pairs, material, fn_floor, rolling,
+                                                           dt, a, active, n, first_row, energy,
+                                                           max_ratio);
     }
-    return contact_groups_as<cap_when_sliding, Law, direct>(
-        law, pairs, material, fn_floor, rolling, dt, a, active, n, first_row, energy, max_ratio);
+    return rolling == 0.0
+               ? contact_groups_as<v | r, Law, direct>(law, pairs, material, fn_floor, rolling, dt,
+                                                       a, active, n, first_row, energy, max_ratio)
+               : contact_groups_as<v, Law, direct>(law, pairs, material, fn_floor, rolling, dt, a,
+                                                   active, n, first_row, energy, max_ratio);
 }
 #endif
 
