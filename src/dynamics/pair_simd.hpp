@@ -4,8 +4,9 @@
 // read as one 16-byte (x, y) and one 8-byte (z) load each and transposed into one register per
 // component, geometry and law (contact::evaluate_lanes) run on the four lanes, and the results are
 // transposed back and added to the particles in list order. Nothing is staged through memory, as
-// in notes/limits.md's dem2 (AoS records and 4 x 4 register transposes). Without AVX2 the pair
-// loop uses its blocked structure-of-arrays path only.
+// in notes/limits.md's dem2 (AoS records and 4 x 4 register transposes). The contact filter that
+// finds the touching pairs also takes four list entries at a time. Without AVX2 the pair loop uses
+// its one-entry filter and its blocked structure-of-arrays path only.
 
 #include "contact/contact_law.hpp"
 #include "core/material.hpp"
@@ -110,12 +111,6 @@ struct PairArrays {
     double* rows;               ///< pair result rows (f, torque_i, torque_j), several threads only
 };
 
-/// The touching list entries active[0..n) of a chunk, four at a time with the law on the four
-/// lanes of a register (AVX2): records transposed in registers, geometry and law (evaluate_lanes),
-/// then the results added to force/torque contact by contact in list order (`direct`, one thread)
-/// or written to rows[9 (first_row + a)] (several threads). Pair properties from `pairs` by the
-/// particles' `material`. Returns how many entries it took (a multiple of four); energy and
-/// max_ratio accumulate in entry order.
 #if defined(__AVX2__) && defined(__FMA__)
 /// The contact filter of System::pair_chunk four list entries at a time, from `begin` while four
 /// remain before `end`: which entries touch (squared distance below the squared radius sum, as
@@ -168,6 +163,12 @@ std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t
 }
 #endif
 
+/// The touching list entries active[0..n) of a chunk, four at a time with the law on the four
+/// lanes of a register (AVX2): records transposed in registers, geometry and law (evaluate_lanes),
+/// then the results added to force/torque contact by contact in list order (`direct`, one thread)
+/// or written to rows[9 (first_row + a)] (several threads). Pair properties from `pairs` by the
+/// particles' `material`. Returns how many entries it took (a multiple of four); energy and
+/// max_ratio accumulate in entry order.
 /// `variant` selects the law's contact::LaneVariant (without_rolling only when rolling is 0).
 template <unsigned variant, class Law, bool direct>
 std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std::int32_t* material,
@@ -191,6 +192,7 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
     }
     // Largest overlap / (2 min(ri, rj)) per lane, kept as a fraction (top / bottom) compared by
     // cross products, so that the divider (the busiest unit) does one division per lane per call.
+    // Rounding may pick either of two ratios within an ulp of each other (a diagnostic only).
     V top = contact::lanes::splat(0.0, c.e_star);
     V bottom = contact::lanes::splat(1.0, c.e_star);
     std::size_t g = 0;
