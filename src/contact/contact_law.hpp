@@ -126,6 +126,16 @@ inline V4 vabs(V4 a) {
 template <class T> T vmax(T a, T b) {
     return select(a < b, b, a);
 }
+/// True when the mask m is set (one contact).
+inline bool any(bool m) {
+    return m;
+}
+#ifdef __AVX__
+/// True when the mask m is set in any lane (four contacts).
+template <class M> bool any(M m) {
+    return _mm256_movemask_pd(_mm256_castsi256_pd(reinterpret_cast<__m256i>(m))) != 0;
+}
+#endif
 
 } // namespace lanes
 
@@ -139,21 +149,26 @@ template <class T> struct Stiffness {
     T energy; // elastic energy of the normal spring (J)
 };
 
-template <class T>
+// With `shared_root`, g_t = g_n sqrt(S_t / S_n) = g_n damping_ratio (one square root fewer).
+template <bool shared_root, class T>
 inline Stiffness<T> stiffness(const HertzMindlin&, T e_star, T g_star, T beta, T r_eff, T m_eff,
-                              T overlap) {
+                              T overlap, T damping_ratio) {
     using lanes::vsqrt;
     const T a = vsqrt(r_eff * overlap); // contact radius (m)
     const T sn = 2.0 * e_star * a;
     const T st = 8.0 * g_star * a;
     constexpr double k56 = 1.8257418583505538; // 2 sqrt(5/6)
     const T kn = 2.0 / 3.0 * sn;               // 4/3 E* sqrt(R* delta)
-    return {kn, -k56 * beta * vsqrt(sn * m_eff), st, -k56 * beta * vsqrt(st * m_eff),
-            0.4 * kn * overlap * overlap};
+    const T gn = -k56 * beta * vsqrt(sn * m_eff);
+    if constexpr (shared_root) {
+        return {kn, gn, st, gn * damping_ratio, 0.4 * kn * overlap * overlap};
+    }
+    return {kn, gn, st, -k56 * beta * vsqrt(st * m_eff), 0.4 * kn * overlap * overlap};
 }
 
-template <class T>
-inline Stiffness<T> stiffness(const LinearSpringDashpot& law, T, T, T beta, T, T m_eff, T overlap) {
+template <bool shared_root, class T>
+inline Stiffness<T> stiffness(const LinearSpringDashpot& law, T, T, T beta, T, T m_eff, T overlap,
+                              T) {
     using lanes::splat;
     return {splat(law.stiffness, beta), -2.0 * beta * lanes::vsqrt(m_eff * law.stiffness),
             splat(law.tangential_ratio * law.stiffness, beta), splat(0.0, beta),
@@ -197,16 +212,31 @@ template <class T> struct ContactLanes {
     T n[3], overlap, r_eff, m_eff, lever_i, lever_j; // geometry
     T v[3], wi[3], wj[3];                            // kinematics
     T e_star, g_star, beta, mu, mu_roll;             // pair properties
-    T s[3];                                          // history, in/out
-    T f[3], ti[3], tj[3], fn, energy;                // results
+    T damping_ratio; // sqrt(4 G*/E*), g_t / g_n of Hertz-Mindlin; read by `shared_damping_root`
+    T s[3];          // history, in/out
+    T f[3], ti[3], tj[3], fn, energy; // results
 };
 
-/// Evaluates the law on c; written without branches, so that it runs on vector lanes and a loop
-/// over the contacts of a block vectorises. This is the single implementation of the laws above;
-/// `evaluate_block` and `evaluate` wrap it. `fn_floor` is 0 when the normal force is clamped, -inf
-/// otherwise; `rolling` is 1 with rolling resistance, 0 without (scalars, so the loop carries no
-/// flag loads).
-template <class Law, class T>
+/// Variants of evaluate_lanes chosen at compile time.
+enum LaneVariant : unsigned {
+    /// Branch-free (the loops over blocks vectorise only so).
+    branch_free = 0,
+    /// No rolling resistance term: only when `rolling` is 0 (the term is then +-0).
+    without_rolling = 1,
+    /// The Coulomb cap (a square root and two divisions) is computed only when a lane slides: one
+    /// branch per call, for the register path, where the divider is the busiest unit.
+    cap_when_sliding = 2,
+    /// Hertz-Mindlin's tangential damping from the normal one times `damping_ratio` (set by the
+    /// caller): one square root fewer, other round-off (not the same bits as the others).
+    shared_damping_root = 4,
+};
+
+/// Evaluates the law on c; written without branches (variant `branch_free`), so that it runs on
+/// vector lanes and a loop over the contacts of a block vectorises. This is the single
+/// implementation of the laws above; `evaluate_block` and `evaluate` wrap it. `fn_floor` is 0 when
+/// the normal force is clamped, -inf otherwise; `rolling` is 1 with rolling resistance, 0 without
+/// (scalars, so the loop carries no flag loads).
+template <unsigned variant = branch_free, class Law, class T>
 [[gnu::always_inline]] inline void evaluate_lanes(const Law& law, double fn_floor, double rolling,
                                                   ContactLanes<T>& c, double dt) {
     using lanes::select;
@@ -214,8 +244,8 @@ template <class Law, class T>
     using lanes::vsqrt;
     const T zero = lanes::splat(0.0, c.overlap);
     const T one = lanes::splat(1.0, c.overlap);
-    const detail::Stiffness<T> k =
-        detail::stiffness(law, c.e_star, c.g_star, c.beta, c.r_eff, c.m_eff, c.overlap);
+    const detail::Stiffness<T> k = detail::stiffness<(variant & shared_damping_root) != 0>(
+        law, c.e_star, c.g_star, c.beta, c.r_eff, c.m_eff, c.overlap, c.damping_ratio);
     const T n0 = c.n[0];
     const T n1 = c.n[1];
     const T n2 = c.n[2];
@@ -261,15 +291,25 @@ template <class Law, class T>
     const T cap = c.mu * vabs(fn);
     const auto slide = ftsq > cap * cap;
     const T on = select(c.mu > zero, one, zero);
-    const T capped = cap / vsqrt(select(ftsq > zero, ftsq, one));
-    const T scale = on * select(slide, capped, one);
-    ft0 *= scale;
-    ft1 *= scale;
-    ft2 *= scale;
-    const T inv_kt = 1.0 / k.kt;
-    c.s[0] = on * select(slide, -ft0 * inv_kt, s0);
-    c.s[1] = on * select(slide, -ft1 * inv_kt, s1);
-    c.s[2] = on * select(slide, -ft2 * inv_kt, s2);
+    if ((variant & cap_when_sliding) != 0 && !lanes::any(slide)) {
+        // What the selects below give when no lane slides (scale = on), without the divider.
+        ft0 *= on;
+        ft1 *= on;
+        ft2 *= on;
+        c.s[0] = on * s0;
+        c.s[1] = on * s1;
+        c.s[2] = on * s2;
+    } else {
+        const T capped = cap / vsqrt(select(ftsq > zero, ftsq, one));
+        const T scale = on * select(slide, capped, one);
+        ft0 *= scale;
+        ft1 *= scale;
+        ft2 *= scale;
+        const T inv_kt = 1.0 / k.kt;
+        c.s[0] = on * select(slide, -ft0 * inv_kt, s0);
+        c.s[1] = on * select(slide, -ft1 * inv_kt, s1);
+        c.s[2] = on * select(slide, -ft2 * inv_kt, s2);
+    }
     c.f[0] = fn * n0 + ft0;
     c.f[1] = fn * n1 + ft1;
     c.f[2] = fn * n2 + ft2;
@@ -277,6 +317,17 @@ template <class Law, class T>
     const T nxf1 = n2 * ft0 - n0 * ft2;
     const T nxf2 = n0 * ft1 - n1 * ft0;
 
+    c.fn = fn;
+    c.energy = k.energy;
+    if constexpr ((variant & without_rolling) != 0) {
+        c.ti[0] = -c.lever_i * nxf0;
+        c.ti[1] = -c.lever_i * nxf1;
+        c.ti[2] = -c.lever_i * nxf2;
+        c.tj[0] = -c.lever_j * nxf0;
+        c.tj[1] = -c.lever_j * nxf1;
+        c.tj[2] = -c.lever_j * nxf2;
+        return;
+    }
     // Rolling resistance, constant directional torque.
     const T wr0 = c.wi[0] - c.wj[0];
     const T wr1 = c.wi[1] - c.wj[1];
@@ -291,8 +342,6 @@ template <class Law, class T>
     c.tj[0] = -c.lever_j * nxf0 - mr * wr0;
     c.tj[1] = -c.lever_j * nxf1 - mr * wr1;
     c.tj[2] = -c.lever_j * nxf2 - mr * wr2;
-    c.fn = fn;
-    c.energy = k.energy;
 }
 
 /// Evaluates contact b of a block (evaluate_lanes on one contact); a loop over b vectorises.
@@ -300,6 +349,7 @@ template <class Law, std::size_t B>
 [[gnu::always_inline]] inline void evaluate_block(const Law& law, double fn_floor, double rolling,
                                                   ContactBlock<B>& c, std::size_t b, double dt) {
     ContactLanes<double> l;
+    l.damping_ratio = 0.0; // not read by this variant
     for (int q = 0; q < 3; ++q) {
         l.n[q] = c.n[q][b];
         l.v[q] = c.v[q][b];

@@ -4,14 +4,16 @@
 // read as one 16-byte (x, y) and one 8-byte (z) load each and transposed into one register per
 // component, geometry and law (contact::evaluate_lanes) run on the four lanes, and the results are
 // transposed back and added to the particles in list order. Nothing is staged through memory, as
-// in notes/limits.md's dem2 (AoS records and 4 x 4 register transposes). Without AVX2 the pair
-// loop uses its blocked structure-of-arrays path only.
+// in notes/limits.md's dem2 (AoS records and 4 x 4 register transposes). The contact filter that
+// finds the touching pairs also takes four list entries at a time. Without AVX2 the pair loop uses
+// its one-entry filter and its blocked structure-of-arrays path only.
 
 #include "contact/contact_law.hpp"
 #include "core/material.hpp"
 #include "core/types.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #ifdef __AVX2__
@@ -19,6 +21,19 @@
 #endif
 
 namespace kiln::dynamics::simd {
+
+/// |a - b|^2 (m^2, any common frame) as the pair loop's touch test takes it: explicit
+/// multiply-adds, so that the one-entry and the four-entry filters give the same bits.
+inline double squared_distance(const Vec3& a, const Vec3& b) {
+    const double d0 = a[0] - b[0];
+    const double d1 = a[1] - b[1];
+    const double d2 = a[2] - b[2];
+#ifdef __FMA__
+    return std::fma(d2, d2, std::fma(d1, d1, d0 * d0));
+#else
+    return d2 * d2 + (d1 * d1 + d0 * d0);
+#endif
+}
 
 #ifdef __AVX2__
 /// Components x, y, z of four records, one register each (lane l = record l).
@@ -96,17 +111,70 @@ struct PairArrays {
     double* rows;               ///< pair result rows (f, torque_i, torque_j), several threads only
 };
 
+#if defined(__AVX2__) && defined(__FMA__)
+/// The contact filter of System::pair_chunk four list entries at a time, from `begin` while four
+/// remain before `end`: which entries touch (squared distance below the squared radius sum, as
+/// squared_distance), their indices appended to active[n_active..] without a branch, the histories
+/// of the others cleared (bit mask); with `rows` (several threads) the row of each entry, `begin` +
+/// its place among the touching ones or `zero_row`. Returns the first entry not taken.
+template <bool with_rows>
+std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t end,
+                             std::uint32_t* active, std::size_t& n_active, std::uint32_t* rows,
+                             std::uint32_t zero_row) {
+    static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 records are packed");
+    std::size_t n = n_active;
+    std::size_t k = begin;
+    for (; k + 4 <= end; k += 4) {
+        const std::uint32_t* is = a.owner + k;
+        const std::uint32_t* js = a.nb + k;
+        const Columns xi = columns(a.x, is);
+        const Columns xj = columns(a.x, js);
+        const __m256d ri =
+            _mm256_setr_pd(a.radius[is[0]], a.radius[is[1]], a.radius[is[2]], a.radius[is[3]]);
+        const __m256d rj =
+            _mm256_setr_pd(a.radius[js[0]], a.radius[js[1]], a.radius[js[2]], a.radius[js[3]]);
+        const __m256d d0 = _mm256_sub_pd(xi.c[0], xj.c[0]);
+        const __m256d d1 = _mm256_sub_pd(xi.c[1], xj.c[1]);
+        const __m256d d2 = _mm256_sub_pd(xi.c[2], xj.c[2]);
+        const __m256d dist2 =
+            _mm256_fmadd_pd(d2, d2, _mm256_fmadd_pd(d1, d1, _mm256_mul_pd(d0, d0)));
+        const __m256d rsum = _mm256_add_pd(ri, rj);
+        const __m256d touch = _mm256_cmp_pd(dist2, _mm256_mul_pd(rsum, rsum), _CMP_LT_OQ);
+        // Histories of the four entries (12 doubles): each lane's mask spread over its 3
+        // components.
+        double* h = a.shear[k].data();
+        _mm256_storeu_pd(h, _mm256_and_pd(_mm256_loadu_pd(h), _mm256_permute4x64_pd(touch, 0x40)));
+        _mm256_storeu_pd(h + 4,
+                         _mm256_and_pd(_mm256_loadu_pd(h + 4), _mm256_permute4x64_pd(touch, 0xA5)));
+        _mm256_storeu_pd(h + 8,
+                         _mm256_and_pd(_mm256_loadu_pd(h + 8), _mm256_permute4x64_pd(touch, 0xFE)));
+        const auto m = static_cast<unsigned>(_mm256_movemask_pd(touch));
+        for (unsigned l = 0; l < 4; ++l) {
+            const unsigned t = (m >> l) & 1U;
+            active[n] = static_cast<std::uint32_t>(k + l);
+            if constexpr (with_rows) {
+                rows[k + l] = t != 0 ? static_cast<std::uint32_t>(begin + n) : zero_row;
+            }
+            n += t;
+        }
+    }
+    n_active = n;
+    return k;
+}
+#endif
+
 /// The touching list entries active[0..n) of a chunk, four at a time with the law on the four
 /// lanes of a register (AVX2): records transposed in registers, geometry and law (evaluate_lanes),
 /// then the results added to force/torque contact by contact in list order (`direct`, one thread)
 /// or written to rows[9 (first_row + a)] (several threads). Pair properties from `pairs` by the
 /// particles' `material`. Returns how many entries it took (a multiple of four); energy and
 /// max_ratio accumulate in entry order.
-template <class Law, bool direct>
-std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
-                           double fn_floor, double rolling, double dt, const PairArrays& a,
-                           const std::uint32_t* active, std::size_t n, std::size_t first_row,
-                           double& energy, double& max_ratio) {
+/// `variant` selects the law's contact::LaneVariant (without_rolling only when rolling is 0).
+template <unsigned variant, class Law, bool direct>
+std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std::int32_t* material,
+                              double fn_floor, double rolling, double dt, const PairArrays& a,
+                              const std::uint32_t* active, std::size_t n, std::size_t first_row,
+                              double& energy, double& max_ratio) {
     constexpr int W = 4;
     using V = contact::lanes::V4;
     using contact::lanes::select;
@@ -119,7 +187,14 @@ std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::in
         c.beta = contact::lanes::splat(pp.beta, c.e_star);
         c.mu = contact::lanes::splat(pp.friction, c.e_star);
         c.mu_roll = contact::lanes::splat(pp.rolling_friction, c.e_star);
+        c.damping_ratio = contact::lanes::splat(
+            std::sqrt(4.0 * pp.effective_shear / pp.effective_modulus), c.e_star);
     }
+    // Largest overlap / (2 min(ri, rj)) per lane, kept as a fraction (top / bottom) compared by
+    // cross products, so that the divider (the busiest unit) does one division per lane per call.
+    // Rounding may pick either of two ratios within an ulp of each other (a diagnostic only).
+    V top = contact::lanes::splat(0.0, c.e_star);
+    V bottom = contact::lanes::splat(1.0, c.e_star);
     std::size_t g = 0;
     for (; g + W <= n; g += W) {
         std::uint32_t ks[W];
@@ -179,8 +254,11 @@ std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::in
         c.m_eff = mi * mj * rsum * inv_rm;
         c.lever_i = ri - 0.5 * overlap;
         c.lever_j = rj - 0.5 * overlap;
-        const V ratio = overlap / (2.0 * select(rj < ri, rj, ri)); // std::min(ri, rj)
-        contact::evaluate_lanes(law, fn_floor, rolling, c, dt);
+        const V diameter = 2.0 * select(rj < ri, rj, ri); // 2 std::min(ri, rj)
+        const auto larger = overlap * bottom > top * diameter;
+        top = select(larger, overlap, top);
+        bottom = select(larger, diameter, bottom);
+        contact::evaluate_lanes<variant>(law, fn_floor, rolling, c, dt);
 
         const RowsXY f = rows_xy(c.f[0], c.f[1]);
         const RowsXY ti = rows_xy(c.ti[0], c.ti[1]);
@@ -203,10 +281,42 @@ std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::in
             }
             set(a.shear[ks[l]], s.r[l], c.s[2][l]);
             energy += c.energy[l];
-            max_ratio = std::max(max_ratio, ratio[l]);
         }
     }
+    for (int l = 0; l < W; ++l) {
+        max_ratio = std::max(max_ratio, top[l] / bottom[l]);
+    }
     return g;
+}
+
+/// contact_groups_as with the variant of the law that has the fewest square roots and divisions:
+/// the Coulomb cap only when a lane slides, no rolling term when there is none (both the same bits)
+/// and, with one material pair, the tangential damping from the normal one (other round-off).
+template <class Law, bool direct>
+std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
+                           double fn_floor, double rolling, double dt, const PairArrays& a,
+                           const std::uint32_t* active, std::size_t n, std::size_t first_row,
+                           double& energy, double& max_ratio) {
+    using contact::cap_when_sliding;
+    using contact::shared_damping_root;
+    using contact::without_rolling;
+    constexpr unsigned v = cap_when_sliding;
+    constexpr unsigned s = shared_damping_root;
+    constexpr unsigned r = without_rolling;
+    if (pairs.size() == 1) {
+        return rolling == 0.0
+                   ? contact_groups_as<v | s | r, Law, direct>(law, pairs, material, fn_floor,
+                                                               rolling, dt, a, active, n, first_row,
+                                                               energy, max_ratio)
+                   : contact_groups_as<v | s, Law, direct>(law, pairs, material, fn_floor, rolling,
+                                                           dt, a, active, n, first_row, energy,
+                                                           max_ratio);
+    }
+    return rolling == 0.0
+               ? contact_groups_as<v | r, Law, direct>(law, pairs, material, fn_floor, rolling, dt,
+                                                       a, active, n, first_row, energy, max_ratio)
+               : contact_groups_as<v, Law, direct>(law, pairs, material, fn_floor, rolling, dt, a,
+                                                   active, n, first_row, energy, max_ratio);
 }
 #endif
 

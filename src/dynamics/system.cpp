@@ -342,11 +342,31 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
     // histories of pairs apart are cleared.
     std::uint32_t active[pair_chunk_size];
     std::size_t n_active = 0;
-    for (std::size_t k = begin; k < end; ++k) {
+#ifdef __AVX2__
+    const simd::PairArrays arrays{owner,
+                                  nb,
+                                  shear,
+                                  x,
+                                  vel,
+                                  omega,
+                                  radius,
+                                  mass,
+                                  force,
+                                  torque,
+                                  direct ? nullptr : pair_result_.data()};
+#endif
+    std::size_t k_first = begin; // entries before it were filtered four at a time
+#if defined(__AVX2__) && defined(__FMA__)
+    if constexpr (!bodies) {
+        k_first = simd::touching_entries<!direct>(arrays, begin, end, active, n_active,
+                                                  direct ? nullptr : result_row_.data(), zero_row);
+    }
+#endif
+    for (std::size_t k = k_first; k < end; ++k) {
         const std::uint32_t i = owner[k];
         const std::uint32_t j = nb[k];
         const double rsum = radius[i] + radius[j];
-        bool touch = (x[i] - x[j]).squaredNorm() < rsum * rsum;
+        bool touch = simd::squared_distance(x[i], x[j]) < rsum * rsum;
         if constexpr (bodies) {
             // Both -1 (spheres) keeps the sign bit; a body (index >= 0) on either side clears it.
             touch = touch && (shape[i] & shape[j]) < 0;
@@ -416,17 +436,6 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
     }
     std::size_t a_first = 0; // entries before it were evaluated in registers, several at a time
 #ifdef __AVX2__
-    const simd::PairArrays arrays{owner,
-                                  nb,
-                                  shear,
-                                  x,
-                                  vel,
-                                  omega,
-                                  radius,
-                                  mass,
-                                  force,
-                                  torque,
-                                  direct ? nullptr : pair_result_.data()};
     a_first =
         simd::contact_groups<Law, direct>(law, pairs_, p_.material.data(), fn_floor, rolling, dt,
                                           arrays, active, n_active, begin, energy, max_ratio);
@@ -870,7 +879,7 @@ void System::collect_contacts(std::vector<ContactRecord>& out) const {
         }
         const double rsum = p_.radius[i] + p_.radius[j];
         const Vec3 d = p_.x[j] - p_.x[i];
-        const double d2 = d.squaredNorm();
+        const double d2 = simd::squared_distance(p_.x[i], p_.x[j]);
         if (!(d2 < rsum * rsum) || d2 == 0.0) {
             continue;
         }

@@ -123,6 +123,7 @@ template <class V, class Law> void lanes_match_one_contact(const Law& law) {
     std::mt19937_64 rng(7);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     int sliding = 0;
+    int sticking_groups = 0;
     for (int it = 0; it < 500; ++it) {
         const double fn_floor = it % 2 == 0 ? 0.0 : -std::numeric_limits<double>::infinity();
         const double rolling = it % 3 == 0 ? 0.0 : 1.0;
@@ -149,6 +150,7 @@ template <class V, class Law> void lanes_match_one_contact(const Law& law) {
             c.beta = -0.3 + 0.1 * u(rng);
             c.mu = it % 11 == 0 ? 0.0 : 0.4 + 0.3 * u(rng);
             c.mu_roll = 0.05 * (1.0 + u(rng));
+            c.damping_ratio = 0.0; // read only by the shared_damping_root variant
             for (int q = 0; q < 3; ++q) {
                 lanes.n[q][l] = c.n[q];
                 lanes.v[q][l] = c.v[q];
@@ -167,7 +169,34 @@ template <class V, class Law> void lanes_match_one_contact(const Law& law) {
             lanes.mu[l] = c.mu;
             lanes.mu_roll[l] = c.mu_roll;
         }
+        // The register path's variant (cap only when a lane slides, no rolling term when rolling is
+        // off) claims the same bits as the branch-free law: compared exactly.
+        ContactLanes<V> fast = lanes;
+        // With one material pair the register path also takes the tangential damping from the
+        // normal one (other round-off): compared with one contact at a time as the others.
+        ContactLanes<V> shared = lanes;
+        for (int l = 0; l < w; ++l) {
+            shared.damping_ratio[l] = std::sqrt(4.0 * one[l].g_star / one[l].e_star);
+        }
+        evaluate_lanes<cap_when_sliding | shared_damping_root>(law, fn_floor, rolling, shared,
+                                                               1e-5);
+        if (rolling == 0.0) {
+            evaluate_lanes<cap_when_sliding | without_rolling>(law, fn_floor, rolling, fast, 1e-5);
+        } else {
+            evaluate_lanes<cap_when_sliding>(law, fn_floor, rolling, fast, 1e-5);
+        }
         evaluate_lanes(law, fn_floor, rolling, lanes, 1e-5);
+        for (int l = 0; l < w; ++l) {
+            for (int q = 0; q < 3; ++q) {
+                EXPECT_EQ(fast.f[q][l], lanes.f[q][l]) << "contact " << it << " lane " << l;
+                EXPECT_EQ(fast.ti[q][l], lanes.ti[q][l]) << "contact " << it << " lane " << l;
+                EXPECT_EQ(fast.tj[q][l], lanes.tj[q][l]) << "contact " << it << " lane " << l;
+                EXPECT_EQ(fast.s[q][l], lanes.s[q][l]) << "contact " << it << " lane " << l;
+            }
+            EXPECT_EQ(fast.fn[l], lanes.fn[l]);
+            EXPECT_EQ(fast.energy[l], lanes.energy[l]);
+        }
+        bool group_slides = false;
         for (int l = 0; l < w; ++l) {
             ContactLanes<double>& c = one[l];
             const Vec3 s_in(c.s[0], c.s[1], c.s[2]);
@@ -177,23 +206,26 @@ template <class V, class Law> void lanes_match_one_contact(const Law& law) {
                 const Vec3 y(b[0][l], b[1][l], b[2][l]);
                 EXPECT_LE((x - y).norm(), fused * x.norm()) << "contact " << it << " lane " << l;
             };
-            near(c.f, lanes.f);
-            near(c.ti, lanes.ti);
-            near(c.tj, lanes.tj);
-            near(c.s, lanes.s);
-            EXPECT_NEAR(c.fn, lanes.fn[l], fused * std::abs(c.fn));
-            EXPECT_NEAR(c.energy, lanes.energy[l], fused * c.energy);
+            for (const ContactLanes<V>* r : {&lanes, &shared}) {
+                near(c.f, r->f);
+                near(c.ti, r->ti);
+                near(c.tj, r->tj);
+                near(c.s, r->s);
+                EXPECT_NEAR(c.fn, r->fn[l], fused * std::abs(c.fn));
+                EXPECT_NEAR(c.energy, r->energy[l], fused * c.energy);
+            }
             const Vec3 s_out(c.s[0], c.s[1], c.s[2]);
-            sliding += c.mu > 0.0 && (s_out - s_in).norm() > 0.0 &&
-                               std::abs(Vec3(c.f[0], c.f[1], c.f[2])
-                                            .cross(Vec3(c.n[0], c.n[1], c.n[2]))
-                                            .norm() -
-                                        c.mu * std::abs(c.fn)) < 1e-9 * std::abs(c.fn)
-                           ? 1
-                           : 0;
+            const bool slides =
+                c.mu > 0.0 && (s_out - s_in).norm() > 0.0 &&
+                std::abs(Vec3(c.f[0], c.f[1], c.f[2]).cross(Vec3(c.n[0], c.n[1], c.n[2])).norm() -
+                         c.mu * std::abs(c.fn)) < 1e-9 * std::abs(c.fn);
+            sliding += slides ? 1 : 0;
+            group_slides = group_slides || slides;
         }
+        sticking_groups += group_slides ? 0 : 1;
     }
-    EXPECT_GT(sliding, 50); // both regimes are exercised (the rest stick)
+    EXPECT_GT(sliding, 50);         // both regimes are exercised (the rest stick)
+    EXPECT_GT(sticking_groups, 20); // and the variant's branch for groups where no lane slides
 }
 
 TEST(VectorLanes, FourLanesMatchOneContactAtATime) {
