@@ -147,7 +147,8 @@ for a in yt:
 # the comparison: the end state of a chaotic drop is one sample of a distribution, so Yade's single
 # drop agrees with kiln in a quantity Q when |Q_Yade - mean Q_kiln| <= 2 sigma sqrt(1 + 1/n), sigma
 # the standard deviation of Q over kiln's n drops (about 95 % if both codes sample the same
-# distribution). Q: mean centre height, body-body contacts per body (2 contacts / bodies), body-wall
+# distribution; but see docs/performance.md, "Against Yade 2023 polyhedra", session 9: drops jittered
+# by 1 um are not independent enough, and their sigma understates the scatter). Q: mean centre height, body-body contacts per body (2 contacts / bodies), body-wall
 # contacts per body, and the time at which the kinetic energy first falls below 1 % of its largest
 # sampled value (how fast the bed dissipates; at least one trace interval of tolerance, the
 # sampling step). Kinetic energy at the end: both beds at rest, E_kin / (n m g d) < 1e-4 (mean
