@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fmt/format.h>
 #include <fstream>
@@ -60,6 +62,14 @@ constexpr double min_difference_deg = 5.0;
 /// Largest static overlap allowed (fraction of the diameter): the soft material must not change
 /// the geometry of the heap.
 constexpr double max_overlap = 0.01;
+
+/// Seed of the pour (release points and cube orientations). 34 unless the environment variable
+/// KILN_REPOSE_SEED gives another (an unsigned integer), to sample the scatter of the angles with
+/// another pour; the default run is unchanged.
+std::uint64_t pour_seed() {
+    const char* arg = std::getenv("KILN_REPOSE_SEED");
+    return arg != nullptr && *arg != '\0' ? std::strtoull(arg, nullptr, 10) : 34;
+}
 
 /// The case, with cubes or with spheres of the same volume.
 io::CaseSpec case_for(bool cubes) {
@@ -152,7 +162,7 @@ Heap pour(bool cubes) {
     io::CaseSpec spec = case_for(cubes);
     dynamics::System sys(spec.scene);
     const double dt = sys.dt();
-    std::mt19937_64 rng(34);
+    std::mt19937_64 rng(pour_seed());
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     std::normal_distribution<double> gauss(0.0, 1.0);
     const double grain_mass = sys.particles().mass.at(0);
@@ -270,6 +280,8 @@ void write_profile(const std::string& name, const Heap& h) {
 
 TEST(AngleOfRepose, CubesPileSteeperThanSpheres) {
     reset_results();
+    std::printf("  pour seed %llu\n", static_cast<unsigned long long>(pour_seed()));
+    record("pour seed", static_cast<double>(pour_seed()), 0.0, 0.0, "-");
     const Heap cubes = pour(true);
     const Heap spheres = pour(false);
     for (const auto& [name, h] : {std::pair<std::string, const Heap&>{"spheres", spheres},
