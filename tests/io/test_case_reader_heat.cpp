@@ -78,6 +78,7 @@ TEST(CaseReaderHeat, HeatKeysReadWithDefaults) {
     EXPECT_EQ(h.step_multiple, 50);
     EXPECT_EQ(h.solver.kind, heat::SolverKind::bicgstab);
     EXPECT_DOUBLE_EQ(h.solver.tolerance, 1e-10);
+    EXPECT_TRUE(h.extrapolated_guess); // default initial_guess = "extrapolated"
     EXPECT_DOUBLE_EQ(h.ambient_temperature, 293.15);
     EXPECT_TRUE(h.stagnation);
     ASSERT_EQ(h.materials.size(), 2U);
@@ -132,6 +133,12 @@ TEST(CaseReaderHeat, RangesAndChoicesAreChecked) {
               std::string::npos);
     EXPECT_NE(error_of(edit("solver = \"bicgstab\"", "solver = \"lu\"")).find("\"cg\""),
               std::string::npos);
+    EXPECT_NE(error_of(edit("solver = \"bicgstab\"", "initial_guess = \"zero\""))
+                  .find("heat.initial_guess"),
+              std::string::npos);
+    EXPECT_FALSE(
+        read_case_text(edit("solver = \"bicgstab\"", "initial_guess = \"last\""), "case.toml")
+            .heat.extrapolated_guess);
     EXPECT_NE(error_of(edit("step_multiple = 50", "step_multiple = 50\nbogus = 1"))
                   .find("heat.bogus: unknown key"),
               std::string::npos);
