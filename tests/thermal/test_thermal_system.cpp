@@ -376,18 +376,24 @@ dynamics::SceneSpec threaded_bed(int threads) {
     return s;
 }
 
+/// Heat of threaded_bed(): resolved spheres (material a spherical, b Cartesian at 350 K) on a
+/// 500 K floor, a thermal step every 20 mechanical steps, solver tolerance `tolerance`.
+HeatSpec threaded_bed_heat(const dynamics::SceneSpec& s, double tolerance) {
+    HeatSpec h = heat_for(s, heat::HeatModel::resolved, 2.0);
+    h.particle_temperature.clear();
+    h.materials[1].grid = GridKind::cartesian;
+    h.materials[1].cells_across = 5;
+    h.materials[1].initial_temperature = 350.0;
+    h.wall_temperature = {500.0, unset};
+    h.solver.tolerance = tolerance;
+    h.step_multiple = 20;
+    return h;
+}
+
 TEST(ThermalSystem, OneAndTwoThreadsGiveTheSameTemperatures) {
     const auto run = [](int threads) {
         dynamics::System sys(threaded_bed(threads));
-        HeatSpec h = heat_for(sys.spec(), heat::HeatModel::resolved, 2.0);
-        h.particle_temperature.clear();
-        h.materials[1].grid = GridKind::cartesian;
-        h.materials[1].cells_across = 5;
-        h.materials[1].initial_temperature = 350.0;
-        h.wall_temperature = {500.0, unset};
-        h.solver.tolerance = 1e-8;
-        h.step_multiple = 20;
-        ThermalSystem heat(h, sys);
+        ThermalSystem heat(threaded_bed_heat(sys.spec(), 1e-8), sys);
         for (int k = 0; k < 3000; ++k) {
             sys.step();
             heat.after_step(sys);
@@ -414,14 +420,7 @@ TEST(ThermalSystem, ExtrapolatedGuessGivesTheSameTemperaturesInFewerIterations) 
     constexpr double kTolerance = 1e-12;
     const auto run = [](bool extrapolated) {
         dynamics::System sys(threaded_bed(1));
-        HeatSpec h = heat_for(sys.spec(), heat::HeatModel::resolved, 2.0);
-        h.particle_temperature.clear();
-        h.materials[1].grid = GridKind::cartesian;
-        h.materials[1].cells_across = 5;
-        h.materials[1].initial_temperature = 350.0;
-        h.wall_temperature = {500.0, unset};
-        h.solver.tolerance = kTolerance;
-        h.step_multiple = 20;
+        HeatSpec h = threaded_bed_heat(sys.spec(), kTolerance);
         h.extrapolated_guess = extrapolated;
         ThermalSystem heat(h, sys);
         for (int k = 0; k < 3000; ++k) {
@@ -431,8 +430,7 @@ TEST(ThermalSystem, ExtrapolatedGuessGivesTheSameTemperaturesInFewerIterations) 
         ParticleTemperatures t;
         heat.particle_temperatures(sys, t);
         return std::make_tuple(t.mean, heat.external_heat(), heat.counters().iterations,
-                               heat.save_state().previous_fields.size(),
-                               heat.counters().substeps);
+                               heat.save_state().previous_fields.size(), heat.counters().substeps);
     };
     const auto [t_ex, q_ex, it_ex, prev_ex, steps] = run(true);
     const auto [t_last, q_last, it_last, prev_last, steps_last] = run(false);
