@@ -4,6 +4,7 @@
 #include "heat/cholmod_solver.hpp"
 #include "heat/convection.hpp"
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -225,6 +226,11 @@ int TemperaturePool::add(int cells, double initial) {
     count_.push_back(cells);
     values_.insert(values_.end(), static_cast<std::size_t>(cells), initial);
     return static_cast<int>(offset_.size()) - 1;
+}
+
+void TemperaturePool::assign(std::span<const double> all) {
+    KILN_ASSERT(all.size() == values_.size());
+    std::copy(all.begin(), all.end(), values_.begin());
 }
 
 std::span<double> TemperaturePool::field(int p) {

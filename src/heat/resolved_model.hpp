@@ -153,6 +153,8 @@ class TemperaturePool {
     [[nodiscard]] int size() const { return static_cast<int>(offset_.size()); }
     /// All values (K).
     [[nodiscard]] const std::vector<double>& values() const { return values_; }
+    /// Sets all values (K), slot after slot, as values() lists them; `all` has values().size().
+    void assign(std::span<const double> all);
 
   private:
     std::vector<double> values_;

@@ -163,12 +163,7 @@ void ThermalSystem::restore_state(const ThermalState& s, const dynamics::System&
         throw InputError("heat: the checkpoint's temperatures do not fit this case (different "
                          "particles or heat models); restart with the case that wrote it");
     }
-    std::size_t at = 0;
-    for (int slot = 0; slot < pool_.size(); ++slot) {
-        const std::span<double> f = pool_.field(slot);
-        std::copy_n(s.fields.begin() + static_cast<std::ptrdiff_t>(at), f.size(), f.begin());
-        at += f.size();
-    }
+    pool_.assign(s.fields);
     if (keeps_previous()) {
         // A checkpoint without them (written with the last-field guess, or before they were
         // kept) restarts the extrapolation: the first guess is the field itself.
@@ -177,12 +172,7 @@ void ThermalSystem::restore_state(const ThermalState& s, const dynamics::System&
             throw InputError("heat: the checkpoint's previous temperatures do not fit its "
                              "temperatures; the file is damaged");
         }
-        at = 0;
-        for (int slot = 0; slot < previous_.size(); ++slot) {
-            const std::span<double> f = previous_.field(slot);
-            std::copy_n(prev.begin() + static_cast<std::ptrdiff_t>(at), f.size(), f.begin());
-            at += f.size();
-        }
+        previous_.assign(prev);
     }
     lumped_ = s.lumped;
     external_heat_ = s.external_heat;
