@@ -435,28 +435,25 @@ namespace kiln::dynamics {
 namespace {
 
 /// Penetration depth (m) of two convex polyhedron elements by the separating-axis theorem: the
-/// smallest overlap of the projections over every face normal of either body and every cross
-/// product of an edge of one with an edge of the other. Brute force, for tests only.
+/// smallest overlap (overlap_along, either sense) over every face normal of either body and every
+/// cross product of an edge of one with an edge of the other. Brute force, for tests only.
 double separating_axis_depth(const Element& a, const Element& b) {
-    const auto world = [](const Element& e) {
-        std::vector<Vec3> v;
-        for (const Vec3& x : e.hull->vertices) {
-            v.push_back(e.centre + e.q * x);
-        }
-        return v;
-    };
-    const std::vector<Vec3> va = world(a);
-    const std::vector<Vec3> vb = world(b);
+    const geometry::PosedPolyhedron pa{a.poly, a.centre, a.q};
+    const geometry::PosedPolyhedron pb{b.poly, b.centre, b.q};
     std::vector<Vec3> axes;
-    for (const auto& [e, v] : {std::pair{&a, &va}, std::pair{&b, &vb}}) {
-        for (const auto& f : e->hull->faces) {
-            axes.push_back(((*v)[f[1]] - (*v)[f[0]]).cross((*v)[f[2]] - (*v)[f[0]]).normalized());
+    for (const geometry::PosedPolyhedron* p : {&pa, &pb}) {
+        for (const Vec3& n : p->shape->face_normals) {
+            axes.push_back(p->q * n);
         }
     }
-    for (const auto& ea : a.hull->edges) {
-        for (const auto& eb : b.hull->edges) {
-            const Vec3 ta = va[ea[1]] - va[ea[0]];
-            const Vec3 tb = vb[eb[1]] - vb[eb[0]];
+    const auto edge = [](const geometry::PosedPolyhedron& p, const std::array<int, 4>& e) {
+        const std::vector<Vec3>& v = p.shape->vertices;
+        return Vec3(p.q * (v[static_cast<std::size_t>(e[1])] - v[static_cast<std::size_t>(e[0])]));
+    };
+    for (const auto& ea : pa.shape->edges) {
+        for (const auto& eb : pb.shape->edges) {
+            const Vec3 ta = edge(pa, ea);
+            const Vec3 tb = edge(pb, eb);
             const Vec3 c = ta.cross(tb);
             // Every direction bounds the depth from above, so even the noisy cross product of
             // nearly parallel edges is a valid candidate (and here the deciding one).
@@ -467,20 +464,7 @@ double separating_axis_depth(const Element& a, const Element& b) {
     }
     double depth = std::numeric_limits<double>::infinity();
     for (const Vec3& n : axes) {
-        constexpr double kInf = std::numeric_limits<double>::infinity();
-        double a_lo = kInf;
-        double a_hi = -kInf;
-        double b_lo = kInf;
-        double b_hi = -kInf;
-        for (const Vec3& x : va) {
-            a_lo = std::min(a_lo, x.dot(n));
-            a_hi = std::max(a_hi, x.dot(n));
-        }
-        for (const Vec3& x : vb) {
-            b_lo = std::min(b_lo, x.dot(n));
-            b_hi = std::max(b_hi, x.dot(n));
-        }
-        depth = std::min(depth, std::min(a_hi - b_lo, b_hi - a_lo));
+        depth = std::min({depth, overlap_along(pa, pb, n), overlap_along(pa, pb, -n)});
     }
     return depth;
 }
