@@ -614,14 +614,10 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
     if (features == nullptr) {
         throw std::logic_error("append_elements: polyhedron template without its features");
     }
-    double inradius = std::numeric_limits<double>::infinity();
-    for (const double o : features->face_offsets) {
-        inradius = std::min(inradius, o);
-    }
-    Element e{Element::Kind::polyhedron, x, r, nullptr, q, inradius};
+    Element e{Element::Kind::polyhedron, x, r, nullptr, q, features->inradius};
     e.poly = features;
     e.hull = &hull;
-    e.r_equiv = equivalent_radius(*t);
+    e.r_equiv = features->r_equiv > 0.0 ? features->r_equiv : equivalent_radius(*t);
     out.push_back(e);
 }
 

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <numeric>
@@ -86,6 +87,10 @@ PolyhedronFeatures polyhedron_features(const ConvexPolyhedron& p) {
             f.face_offsets[g] = std::max(
                 f.face_offsets[g], f.face_normals[g].dot(p.vertices[static_cast<std::size_t>(v)]));
         }
+    }
+    f.inradius = std::numeric_limits<double>::infinity();
+    for (const double o : f.face_offsets) {
+        f.inradius = std::min(f.inradius, o);
     }
     for (const auto& e : p.edges) {
         const auto t0 = tri_of.find({e[0], e[1]});
@@ -207,6 +212,31 @@ void keep_edges(const std::vector<std::array<int, 4>>& edges, const std::vector<
                 double radius, std::vector<int>& kept) {
     kept.clear();
     const double far2 = (radius + reach) * (radius + reach);
+    if (nf <= 64) {
+        // One bit per face plane and vertex: set when the vertex lies beyond the plane by more
+        // than reach. An edge has both ends beyond one plane exactly when the masks of its ends
+        // share a bit, so the plane test costs one AND per edge after nv x nf comparisons
+        // (without branches) instead of up to 2 nf per edge (the loop below; the same set kept).
+        thread_local std::vector<std::uint64_t> beyond;
+        beyond.resize(v.size());
+        for (std::size_t i = 0; i < v.size(); ++i) {
+            const double* d = dist.data() + i * nf;
+            std::uint64_t mask = 0;
+            for (std::size_t k = 0; k < nf; ++k) {
+                mask |= static_cast<std::uint64_t>(d[k] > reach) << k;
+            }
+            beyond[i] = mask;
+        }
+        for (std::size_t e = 0; e < edges.size(); ++e) {
+            const auto i0 = static_cast<std::size_t>(edges[e][0]);
+            const auto i1 = static_cast<std::size_t>(edges[e][1]);
+            if ((beyond[i0] & beyond[i1]) == 0 &&
+                segment_point_distance2(v[i0], v[i1], centre) <= far2) {
+                kept.push_back(static_cast<int>(e));
+            }
+        }
+        return;
+    }
     std::size_t hint = 0; // the plane that dropped the last edge: it often drops the next too
     for (std::size_t e = 0; e < edges.size(); ++e) {
         const auto i0 = static_cast<std::size_t>(edges[e][0]);

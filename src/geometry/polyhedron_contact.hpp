@@ -44,6 +44,10 @@ struct PolyhedronFeatures {
     std::vector<double> face_offsets;      ///< n . x on each face plane (m), body frame
     std::vector<std::array<int, 4>> edges; ///< feature edges: vertices v0, v1, faces f0, f1
     double radius = 0.0;                   ///< distance of the farthest vertex from the origin (m)
+    double inradius = 0.0;                 ///< smallest face offset (m): the inscribed radius
+    /// Volume-equivalent sphere radius of the template (m), set by the owner of the template
+    /// (dynamics::System) so the step loop does not take a cube root per body and step; 0: unset.
+    double r_equiv = 0.0;
 
     /// Support point (m, body frame): the vertex maximising d . x for a body-frame direction d.
     [[nodiscard]] Vec3 support(const Vec3& d_body) const;

@@ -8,7 +8,9 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <fmt/format.h>
 #include <limits>
 #include <numbers>
@@ -114,7 +116,45 @@ Vec3 Superquadric::parametric_point(double eta, double omega) const {
             half_axes.z() * spow(std::sin(eta), e1)};
 }
 
+namespace detail {
+// Without libm's cbrt, which rebuilds the exponent through out-of-line calls (cbrt, frexp and
+// scalbn were ~30 % of the profile of the e = 0.8 superquadric scene) and is up to 3 ulp off.
+// Start: the bits of x divided by 3 plus a constant (Kahan's estimate: the biased exponent
+// divided by 3, a few per cent off), then two Halley steps (cubic convergence: 3e-2 -> 1e-14)
+// and one Newton step with a fused residual; within 1 ulp of the exact root
+// (Superquadric.CubeRootMatchesLibm). Subnormal and huge arguments are scaled by 2^(+-300)
+// first.
+double cube_root(double x) {
+    if (!(x > 0.0) || x == std::numeric_limits<double>::infinity()) {
+        return x;
+    }
+    double post = 1.0;
+    if (x < 0x1p-900) {
+        x *= 0x1p300;
+        post = 0x1p-100;
+    } else if (x > 0x1p900) {
+        x *= 0x1p-300;
+        post = 0x1p100;
+    }
+    double y = std::bit_cast<double>(std::bit_cast<std::uint64_t>(x) / 3 + 0x2A9F7893782DA1CEULL);
+    for (int i = 0; i < 2; ++i) {
+        const double y3 = y * y * y;
+        y *= (y3 + 2.0 * x) / (2.0 * y3 + x);
+    }
+    // Newton step on y^3 - x with the residual from fused products (the square's rounding error
+    // e2 included), so the result is the correctly rounded root in all but ~1e-4 of the cases.
+    const double y2 = y * y;
+    const double e2 = std::fma(y, y, -y2);
+    const double residual = std::fma(y2, y, -x) + e2 * y;
+    y -= residual / (3.0 * y2);
+    return y * post;
+}
+
+} // namespace detail
+
 namespace {
+using detail::cube_root;
+
 /// x^a for x >= 0 and the exponents a = 1/(n - 1) and -1/n of a support point (n = 2/e): roots the
 /// common exponents take without libm's pow (e = 1, 2/3, 0.5, 0.8, 0.2 give a = 1, 1/2, 1/3,
 /// 2/3, 1/9; -1/n = -1/4 for e = 0.5), std::pow otherwise. An exponent within 1e-14 of a special
@@ -129,14 +169,14 @@ double support_pow(double x, double a) {
         return std::sqrt(x);
     }
     if (std::abs(a - 1.0 / 3.0) < kSame) {
-        return std::cbrt(x);
+        return cube_root(x);
     }
     if (std::abs(a - 2.0 / 3.0) < kSame) {
-        const double c = std::cbrt(x);
+        const double c = cube_root(x);
         return c * c;
     }
     if (std::abs(a - 1.0 / 9.0) < kSame) {
-        return std::cbrt(std::cbrt(x));
+        return cube_root(cube_root(x));
     }
     if (std::abs(a + 0.25) < kSame) {
         return 1.0 / std::sqrt(std::sqrt(x));

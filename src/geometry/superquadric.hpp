@@ -62,4 +62,10 @@ struct Superquadric {
 /// Beta function B(x, y) = Gamma(x) Gamma(y) / Gamma(x + y), x, y > 0.
 [[nodiscard]] double beta_function(double x, double y);
 
+namespace detail {
+/// Cube root of x >= 0 (0, infinity and NaN pass through) without libm, within 1 ulp of the
+/// exact root; the support map's roots (superquadric.cpp).
+[[nodiscard]] double cube_root(double x);
+} // namespace detail
+
 } // namespace kiln::geometry
