@@ -157,9 +157,9 @@ using detail::cube_root;
 
 /// x^a for x >= 0 and the exponents a = 1/(n - 1) and -1/n of a support point (n = 2/e): roots the
 /// common exponents take without libm's pow (e = 1, 2/3, 0.5, 0.8, 0.2 give a = 1, 1/2, 1/3,
-/// 2/3, 1/9; -1/n = -1/4 for e = 0.5), std::pow otherwise. An exponent within 1e-14 of a special
-/// value counts as that value (2/e is not exact in binary): the relative change of x^a,
-/// |da ln x|, stays below 1e-12 for every x >= 1e-308.
+/// 2/3, 1/9; -1/n = -1/4 for e = 0.5), exp2 and log2 otherwise. An exponent within 1e-14 of a
+/// special value counts as that value (2/e is not exact in binary): the relative change of x^a, |da
+/// ln x|, stays below 1e-12 for every x >= 1e-308.
 double support_pow(double x, double a) {
     constexpr double kSame = 1e-15;
     if (std::abs(a - 1.0) < kSame) {
@@ -184,7 +184,10 @@ double support_pow(double x, double a) {
     if (std::abs(a + 0.5) < kSame) {
         return 1.0 / std::sqrt(x);
     }
-    return std::pow(x, a);
+    // Other exponents: 2^(a log2 x), about a quarter cheaper than libm's pow (which keeps extra
+    // precision for every base and exponent). Error: that of log2 scaled by |a log2 x|, i.e.
+    // below 1.6e-13 relative for any result above the underflow limit (|a log2 x| < 1075).
+    return std::exp2(a * std::log2(x));
 }
 } // namespace
 
