@@ -1,0 +1,75 @@
+// Fixed-work timing of the lattice scenes of bench_bodies.cpp and bench_polyhedra_scene.cpp, for
+// A/B comparisons of two builds: the Google Benchmark binaries time as many steps as fit in their
+// minimum time, so two builds of different speed time different parts of the collapsing lattice's
+// transient (and different contact counts). Here both run the same steps: `warmup` untimed steps,
+// then `steps` timed ones (process CPU time, s). Prints CPU time per step, contacts per particle,
+// CPU time per contact (particle and wall contacts) and a checksum of the final positions (m,
+// world frame), equal between builds that give the same bits.
+//
+// build/bench/kiln_scene_steps KIND WARMUP STEPS, KIND: sphere, sq08, sq03 (superquadrics of
+// e = 0.8, 0.3) or a shipped shape name (cube, icosahedron, cylinder_16, cylinder_12, ...).
+
+#include "geometry/superquadric.hpp"
+#include "io/shape_reader.hpp"
+#include "lattice_scene.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <optional>
+#include <string>
+
+namespace {
+
+double cpu_seconds() {
+    timespec t{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+kiln::dynamics::SceneSpec scene(const std::string& kind) {
+    if (kind == "sphere") {
+        return kiln::bench::lattice_box_scene(std::nullopt, 3.3e-3); // bench_bodies kind 0
+    }
+    if (kind == "sq08" || kind == "sq03") {
+        kiln::geometry::Superquadric q;
+        q.half_axes = kiln::Vec3::Constant(3e-3);
+        q.e1 = q.e2 = kind == "sq08" ? 0.8 : 0.3;
+        return kiln::bench::lattice_box_scene(kiln::geometry::make_template("sq", q));
+    }
+    return kiln::bench::lattice_box_scene(
+        kiln::io::read_shape_file(kiln::io::find_shape_file(kind, kiln::io::default_shape_dirs())));
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    if (argc != 4) {
+        std::fprintf(stderr, "usage: kiln_scene_steps KIND WARMUP STEPS\n");
+        return 2;
+    }
+    const std::string kind = argv[1];
+    const int warmup = std::atoi(argv[2]);
+    const int steps = std::atoi(argv[3]);
+    kiln::dynamics::System sys(scene(kind));
+    for (int k = 0; k < warmup; ++k) {
+        sys.step();
+    }
+    long contacts = 0;
+    const double t0 = cpu_seconds();
+    for (int k = 0; k < steps; ++k) {
+        sys.step();
+        contacts += sys.counters().particle_contacts + sys.counters().wall_contacts;
+    }
+    const double t = cpu_seconds() - t0;
+    double checksum = 0.0;
+    for (const kiln::Vec3& x : sys.particles().x) {
+        checksum += x.x() + 2.0 * x.y() + 3.0 * x.z();
+    }
+    const double n = static_cast<double>(sys.particles().size());
+    std::printf("%s cpu_ms_per_step %.4f contacts_per_particle %.4f cpu_ns_per_contact %.1f "
+                "checksum %.17g\n",
+                kind.c_str(), 1e3 * t / steps, static_cast<double>(contacts) / (n * steps),
+                contacts > 0 ? 1e9 * t / static_cast<double>(contacts) : 0.0, checksum);
+    return 0;
+}
