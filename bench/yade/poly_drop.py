@@ -21,6 +21,10 @@
 #   The volumetric law itself has no viscous damping.
 # Every STEPS / 20 steps a line of OUT/yade_trace.csv records the state (a PyRunner inside O.run:
 # it reads 64 bodies and the interactions, ~1e-4 of the run's cost).
+# env POLY_DROP_SAVE=1: also save the scene (O.save) to OUT/yade_state.xml.bz2 at every trace line
+# (overwritten, so a run stopped early leaves its last state) and to OUT/yade_end.xml.bz2 at the
+# end, and write OUT/yade_contacts.csv, the interactions with a positive penetration volume at the
+# end (bench/yade/yade_contacts.py reads a saved state again). Off by default.
 import json
 import math
 import os
@@ -98,6 +102,7 @@ def state():
             "wall_contacts": wall_contacts, "kinetic_energy": ke, "rotational_energy": rot}
 
 
+save = os.environ.get("POLY_DROP_SAVE", "0") == "1"
 trace_file = open(os.path.join(out, "yade_trace.csv"), "w")
 trace_file.write("time,kinetic_energy,rotational_energy,contacts,wall_contacts,mean_height,max_height\n")
 
@@ -108,6 +113,8 @@ def trace():
         st["time"], st["kinetic_energy"], st["rotational_energy"], st["contacts"],
         st["wall_contacts"], st["mean_height"], st["max_height"]))
     trace_file.flush()
+    if save:
+        O.save(os.path.join(out, "yade_state.xml.bz2"))
 
 
 O.dt = 1e-5
@@ -122,3 +129,15 @@ res.update(state())
 with open(os.path.join(out, "yade.json"), "w") as f:
     json.dump(res, f, indent=1)
 print("YADE", json.dumps(res))
+if save:
+    O.save(os.path.join(out, "yade_end.xml.bz2"))
+    with open(os.path.join(out, "yade_contacts.csv"), "w") as f:
+        # Per interaction with a positive penetration volume: the body ids (0 = the wall), the
+        # penetration volume (m^3), Yade's equivalent penetration depth (m) and the normal force
+        # magnitude (N), world frame.
+        f.write("id1,id2,penetration_volume,equivalent_depth,normal_force\n")
+        for x in O.interactions:
+            if x.isReal and x.geom.penetrationVolume > 0:
+                f.write("%d,%d,%.9g,%.9g,%.9g\n" % (x.id1, x.id2, x.geom.penetrationVolume,
+                                                    x.geom.equivalentPenetrationDepth,
+                                                    x.phys.normalForce.norm()))
