@@ -23,7 +23,7 @@ Minkowski difference (the smallest-norm point of the convex hull of all vertex d
 non-negative least squares, scipy.optimize.nnls with the sum-to-one row). Body-wall: the depth of
 the lowest vertex below z = 0.
 
-Tolerance rule, fixed at 22:27 UTC on 2026-11-24, before any result of this session was looked at:
+Tolerance rule, fixed at 22:18 UTC on 2026-11-24 (commit 8a88ee0), before any result of this session was looked at:
   * the states compared: Yade's restitution-matched drop (damping 0.6, gravity undamped) at
     0.8 s, at rest (session 9's run D was from 0.75 s), and kiln drops of the same export to 0.8 s:
     one from Yade's start and 11 from starts moved by up to 0.3 mm (session 9's 1 um moves gave
