@@ -217,13 +217,17 @@ def yade_state(d):
     bodies = [b["vertices"] for b in data["bodies"]]
     pairs, wall, heights = measure(bodies)
     rows = [r.strip().split(",") for r in open(os.path.join(d, "yade_contacts.csv"))][1:]
-    own = sum(1 for r in rows if r[0] != "0" and r[1] != "0")
-    own_wall = sum(1 for r in rows if r[0] == "0" or r[1] == "0")
+    # Yade's contacts: the pairs its volumetric law gives a force (equivalent depth > 0); those
+    # with a positive penetration volume alone also hold separated pairs (poly_drop.py state()).
+    force = [r for r in rows if float(r[3]) > 1e-18]
+    own = sum(1 for r in force if r[0] != "0" and r[1] != "0")
+    own_wall = sum(1 for r in force if r[0] == "0" or r[1] == "0")
     s = state_figures(pairs, wall, heights, own, own_wall, len(bodies))
+    s["own_volume"] = sum(1 for r in rows if r[0] != "0" and r[1] != "0")
     mass = [b.get("mass", 0.0) for b in data["bodies"]]
     s["ekin"] = data.get("kinetic_energy", float("nan"))
     s["time"] = data["time"]
-    s["volumes"] = sorted(float(r[2]) for r in rows if r[0] != "0" and r[1] != "0")
+    s["volumes"] = sorted(float(r[2]) for r in force if r[0] != "0" and r[1] != "0")
     return s
 
 
@@ -242,11 +246,13 @@ def cmd_report(args):
     y = yade_state(args.yade)
     runs = {}
     for tag in args.kiln:
-        dirs = sorted(d for d in glob.glob(tag + "_*") if os.path.isdir(d))
+        dirs = sorted(d for d in glob.glob(tag + "_*") if os.path.isfile(os.path.join(d, "summary.json")))
         runs[tag] = [kiln_state(d) for d in dirs]
     print(f"Yade state {args.yade} (t = {y['time']:.3f} s): script touching pairs {y['touching']}, "
-          f"Yade's own {y['own']} (positive penetration volume); wall contacts script "
-          f"{sum(1 for w in y['wall'] if w > 0)}, Yade {y['own_wall']}")
+          f"Yade's own {y['own']}; wall contacts script "
+          f"{sum(1 for w in y['wall'] if w > 0)}, Yade {y['own_wall']} (both Yade counts: pairs with a "
+          f"force; pairs with a positive penetration volume, as poly_drop.py counted before "
+          f"session 10: {y['own_volume']})")
     for tag, ss in runs.items():
         diff = [s["touching"] - s["own"] for s in ss]
         print(f"kiln {tag}: {len(ss)} drops; script touching minus kiln's own count per drop: {diff}")

@@ -1,7 +1,9 @@
 # Reads a Yade scene saved by poly_drop.py (POLY_DROP_SAVE=1) and writes, for
 # bench/yade/bed_contacts.py, OUT/yade_contacts.csv (the interactions with a positive penetration
 # volume: body ids, 0 = the wall; penetration volume, m^3; Yade's equivalent penetration depth and
-# cross-section, m and m^2; normal force magnitude, N) and OUT/yade_bodies.json (every body's
+# cross-section, m and m^2; normal force magnitude, N; the volumetric law gives a force only when
+# the depth is > 0: a depth of 0 with a volume marks a pair whose bounding boxes overlap but whose
+# bodies do not, see poly_drop.py state()) and OUT/yade_bodies.json (every body's
 # vertices in the world frame, m, and its speed, m/s), so that the Yade bed can be measured with
 # the same geometry code as kiln's.
 # usage: HOME=<scratch> yade -j1 -n -x yade_state_dump.py STATE.xml.bz2 OUT
