@@ -109,14 +109,20 @@ struct PairArrays {
     Vec3* force;                ///< forces (N), one thread only
     Vec3* torque;               ///< torques (N m), one thread only
     double* rows;               ///< pair result rows (f, torque_i, torque_j), several threads only
+    /// Per group of four list entries (entry k in group k / 4, bit k % 4): which entries touched
+    /// at the last filter (touching_entries); a set bit where unknown. Bit clear implies a zero
+    /// history.
+    std::uint8_t* touched;
 };
 
 #if defined(__AVX2__) && defined(__FMA__)
 /// The contact filter of System::pair_chunk four list entries at a time, from `begin` while four
 /// remain before `end`: which entries touch (squared distance below the squared radius sum, as
 /// squared_distance), their indices appended to active[n_active..] without a branch, the histories
-/// of the others cleared (bit mask); with `rows` (several threads) the row of each entry, `begin` +
-/// its place among the touching ones or `zero_row`. Returns the first entry not taken.
+/// of the others cleared (bit mask) when one of them touched at the last call (`touched`, whose
+/// group of four entries is updated; `begin` is a multiple of four); with `rows` (several threads)
+/// the row of each entry, `begin` + its place among the touching ones or `zero_row`. Returns the
+/// first entry not taken.
 template <bool with_rows>
 std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t end,
                              std::uint32_t* active, std::size_t& n_active, std::uint32_t* rows,
@@ -140,15 +146,22 @@ std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t
             _mm256_fmadd_pd(d2, d2, _mm256_fmadd_pd(d1, d1, _mm256_mul_pd(d0, d0)));
         const __m256d rsum = _mm256_add_pd(ri, rj);
         const __m256d touch = _mm256_cmp_pd(dist2, _mm256_mul_pd(rsum, rsum), _CMP_LT_OQ);
-        // Histories of the four entries (12 doubles): each lane's mask spread over its 3
-        // components.
-        double* h = a.shear[k].data();
-        _mm256_storeu_pd(h, _mm256_and_pd(_mm256_loadu_pd(h), _mm256_permute4x64_pd(touch, 0x40)));
-        _mm256_storeu_pd(h + 4,
-                         _mm256_and_pd(_mm256_loadu_pd(h + 4), _mm256_permute4x64_pd(touch, 0xA5)));
-        _mm256_storeu_pd(h + 8,
-                         _mm256_and_pd(_mm256_loadu_pd(h + 8), _mm256_permute4x64_pd(touch, 0xFE)));
         const auto m = static_cast<unsigned>(_mm256_movemask_pd(touch));
+        // Only an entry that touched at the last filter and does not now can hold a history to
+        // clear (the others that do not touch hold zero): the histories are read and written only
+        // then, not at every step. The four histories (12 doubles) are cleared with each lane's
+        // mask spread over its 3 components.
+        std::uint8_t& was = a.touched[k / 4];
+        if ((was & ~m) != 0U) {
+            double* h = a.shear[k].data();
+            _mm256_storeu_pd(h,
+                             _mm256_and_pd(_mm256_loadu_pd(h), _mm256_permute4x64_pd(touch, 0x40)));
+            _mm256_storeu_pd(
+                h + 4, _mm256_and_pd(_mm256_loadu_pd(h + 4), _mm256_permute4x64_pd(touch, 0xA5)));
+            _mm256_storeu_pd(
+                h + 8, _mm256_and_pd(_mm256_loadu_pd(h + 8), _mm256_permute4x64_pd(touch, 0xFE)));
+        }
+        was = static_cast<std::uint8_t>(m);
         for (unsigned l = 0; l < 4; ++l) {
             const unsigned t = (m >> l) & 1U;
             active[n] = static_cast<std::uint32_t>(k + l);

@@ -256,6 +256,7 @@ void System::index_partners() {
     for (std::size_t k = 0; k < nb.size(); ++k) {
         as_partner_[fill[nb[k]]++] = static_cast<std::uint32_t>(k);
     }
+    touched_.assign((nb.size() + 3) / 4, 0x0F); // unknown: the next filter clears as before
     index_bodies();
     rekey_body_contacts(); // the list or the particle order changed
 }
@@ -307,6 +308,8 @@ constexpr std::size_t block = 16;               // contacts evaluated together b
 constexpr std::size_t pair_chunk_size = 1024;   // list entries per work unit
 constexpr std::size_t particle_unit_size = 512; // particles per work unit
 constexpr std::size_t row = 9;                  // doubles per pair result: f, torque_i, torque_j
+// The four-entry filter keeps one byte of flags per group of four entries from a chunk's start.
+static_assert(pair_chunk_size % 4 == 0);
 
 // Keeps v when `keep`, else sets it to zero, with a bit mask: written as a multiplication by 0 or 1
 // it became a branch, mispredicted half of the time in the contact filter.
@@ -353,7 +356,8 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
                                   mass,
                                   force,
                                   torque,
-                                  direct ? nullptr : pair_result_.data()};
+                                  direct ? nullptr : pair_result_.data(),
+                                  touched_.data()};
 #endif
     std::size_t k_first = begin; // entries before it were filtered four at a time
 #if defined(__AVX2__) && defined(__FMA__)

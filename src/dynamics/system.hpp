@@ -215,6 +215,10 @@ class System {
     std::vector<std::uint32_t> result_row_;
     std::vector<std::uint32_t> as_partner_offsets_, as_partner_;
     std::vector<ChunkTotals> pair_totals_, particle_totals_;
+    // Per group of four list entries (bit k % 4 of byte k / 4): the entries that touched at the
+    // last step's four-entry filter (simd::touching_entries), which clears the histories of those
+    // that stopped touching only; all bits set after a list build or a restart (unknown).
+    std::vector<std::uint8_t> touched_;
     int threads_ = 1;
     ContactCounters counters_;
     TimeStepReport ts_;
