@@ -254,7 +254,14 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
         // Geometry as in the blocked loop of System::pair_chunk, with three divisions fewer (the
         // divider is the busiest unit here): one for the normal, one shared by R* and m*.
         const V rsum = ri + rj;
-        const V dist = contact::lanes::vsqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        const V d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        if constexpr ((variant & contact::project_by_distance) != 0) {
+            for (int q = 0; q < 3; ++q) {
+                c.d[q] = d[q];
+            }
+            c.inv_d2 = 1.0 / d2;
+        }
+        const V dist = contact::lanes::vsqrt(d2);
         const V overlap = rsum - dist;
         const V inv_dist = 1.0 / dist;
         for (int q = 0; q < 3; ++q) {
@@ -313,7 +320,7 @@ std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::in
     using contact::cap_when_sliding;
     using contact::shared_damping_root;
     using contact::without_rolling;
-    constexpr unsigned v = cap_when_sliding;
+    constexpr unsigned v = cap_when_sliding | contact::project_by_distance;
     constexpr unsigned s = shared_damping_root;
     constexpr unsigned r = without_rolling;
     if (pairs.size() == 1) {
