@@ -11,10 +11,12 @@
 #include "contact/contact_law.hpp"
 #include "core/material.hpp"
 #include "core/types.hpp"
+#include "dynamics/wall.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
 
 #ifdef __AVX2__
 #include <immintrin.h>
@@ -307,6 +309,106 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
         max_ratio = std::max(max_ratio, top[l] / bottom[l]);
     }
     return g;
+}
+
+#ifdef __AVX2__
+/// The sphere-wall contacts of System::wall_unit four at a time on the lanes of a register, with
+/// `variant` of the law (as contact_groups). Contact a is particle active[a] against wall
+/// wall_of[a] (wall material wall_material[wall]) with geometry geo[a] (world frame; the wall is
+/// body j, at rest, of infinite mass); histories in wall_shear[particle * nw + wall] (m). Forces
+/// and torques are added to the particles, energy and max_ratio accumulate, contact by contact in
+/// order. A last group of fewer than four repeats its last contact in the free lanes, whose results
+/// are dropped (a copy of a lane does not change which branch the group takes, so the kept lanes
+/// get the same bits).
+template <unsigned variant, class Law>
+void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
+                 const int* wall_material, double fn_floor, double rolling, double dt,
+                 const WallContact* geo, const std::uint32_t* active, const std::uint32_t* wall_of,
+                 std::size_t n, std::size_t nw, const PairArrays& a, Vec3* wall_shear,
+                 double& energy, double& max_ratio) {
+    constexpr int W = 4;
+    using V = contact::lanes::V4;
+    contact::ContactLanes<V> c{};
+    for (int q = 0; q < 3; ++q) {
+        c.wj[q] = contact::lanes::splat(0.0, c.e_star);
+    }
+    c.lever_j = contact::lanes::splat(0.0, c.e_star);
+    for (std::size_t g = 0; g < n; g += W) {
+        const std::size_t m = std::min<std::size_t>(W, n - g);
+        std::uint32_t is[W];
+        std::uint32_t hs[W];
+        std::size_t as[W];
+        for (int l = 0; l < W; ++l) {
+            as[l] = g + std::min<std::size_t>(static_cast<std::size_t>(l), m - 1);
+            is[l] = active[as[l]];
+            hs[l] = static_cast<std::uint32_t>(is[l] * nw + wall_of[as[l]]);
+            const WallContact& wc = geo[as[l]];
+            for (int q = 0; q < 3; ++q) {
+                c.n[q][l] = wc.n[q];
+            }
+            c.overlap[l] = wc.overlap;
+            c.r_eff[l] = wc.r_eff;
+            c.m_eff[l] = a.mass[is[l]];
+            c.lever_i[l] = a.radius[is[l]] - wc.overlap;
+            const PairProperties& pp = pairs.at(material[is[l]], wall_material[wall_of[as[l]]]);
+            c.e_star[l] = pp.effective_modulus;
+            c.g_star[l] = pp.effective_shear;
+            c.beta[l] = pp.beta;
+            c.mu[l] = pp.friction;
+            c.mu_roll[l] = pp.rolling_friction;
+            if constexpr ((variant & contact::shared_damping_root) != 0) {
+                c.damping_ratio[l] = std::sqrt(4.0 * pp.effective_shear / pp.effective_modulus);
+            }
+        }
+        const Columns v = columns(a.vel, is);
+        const Columns w = columns(a.omega, is);
+        const Columns sh = columns(wall_shear, hs);
+        for (int q = 0; q < 3; ++q) {
+            c.v[q] = v.c[q];
+            c.wi[q] = w.c[q];
+            c.s[q] = sh.c[q];
+        }
+        contact::evaluate_lanes<variant>(law, fn_floor, rolling, c, dt);
+        const RowsXY f = rows_xy(c.f[0], c.f[1]);
+        const RowsXY ti = rows_xy(c.ti[0], c.ti[1]);
+        const RowsXY s = rows_xy(c.s[0], c.s[1]);
+        for (std::size_t l = 0; l < m; ++l) {
+            add_to(a.force[is[l]], f.r[l], c.f[2][l]);
+            add_to(a.torque[is[l]], ti.r[l], c.ti[2][l]);
+            set(wall_shear[hs[l]], s.r[l], c.s[2][l]);
+            energy += c.energy[l];
+            max_ratio = std::max(max_ratio, c.overlap[l] / (2.0 * a.radius[is[l]]));
+        }
+    }
+}
+#endif
+
+/// wall_groups with the variant of contact_groups: the cap only when a lane slides, no rolling
+/// term when there is none, and with one material pair the tangential damping from the normal one.
+template <class Law>
+void wall_contacts(const Law& law, const PairTable& pairs, const std::int32_t* material,
+                   const int* wall_material, double fn_floor, double rolling, double dt,
+                   const WallContact* geo, const std::uint32_t* active,
+                   const std::uint32_t* wall_of, std::size_t n, std::size_t nw, const PairArrays& a,
+                   Vec3* wall_shear, double& energy, double& max_ratio) {
+    using contact::cap_when_sliding;
+    using contact::shared_damping_root;
+    using contact::without_rolling;
+    constexpr unsigned v = cap_when_sliding;
+    constexpr unsigned s = shared_damping_root;
+    constexpr unsigned r = without_rolling;
+    const auto run = [&](auto variant) {
+        wall_groups<decltype(variant)::value>(law, pairs, material, wall_material, fn_floor,
+                                              rolling, dt, geo, active, wall_of, n, nw, a,
+                                              wall_shear, energy, max_ratio);
+    };
+    if (pairs.size() == 1) {
+        rolling == 0.0 ? run(std::integral_constant<unsigned, v | s | r>{})
+                       : run(std::integral_constant<unsigned, v | s>{});
+    } else {
+        rolling == 0.0 ? run(std::integral_constant<unsigned, v | r>{})
+                       : run(std::integral_constant<unsigned, v>{});
+    }
 }
 
 /// contact_groups_as with the variant of the law that has the fewest square roots and divisions:

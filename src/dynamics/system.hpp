@@ -206,6 +206,7 @@ class System {
     contact::NeighbourList nl_;
     std::vector<Vec3> wall_shear_; // [particle * n_walls + wall]
     std::vector<std::vector<std::uint32_t>> wall_candidates_;
+    std::vector<int> wall_material_; // material of each analytic wall (spec_.walls order)
     // With more than one thread, pair results go to rows of `pair_result_` (force, torque on i,
     // torque on j; a chunk's touching entries in order from the chunk's first entry index, plus a
     // zero row at the end), `result_row_` maps each entry to its row or to the zero row, and each
