@@ -115,6 +115,7 @@ struct PairArrays {
     /// at the last filter (touching_entries); a set bit where unknown. Bit clear implies a zero
     /// history.
     std::uint8_t* touched;
+    const double* rsum2; ///< list entry -> (r_i + r_j)^2 (m^2)
 };
 
 #if defined(__AVX2__) && defined(__FMA__)
@@ -137,17 +138,12 @@ std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t
         const std::uint32_t* js = a.nb + k;
         const Columns xi = columns(a.x, is);
         const Columns xj = columns(a.x, js);
-        const __m256d ri =
-            _mm256_setr_pd(a.radius[is[0]], a.radius[is[1]], a.radius[is[2]], a.radius[is[3]]);
-        const __m256d rj =
-            _mm256_setr_pd(a.radius[js[0]], a.radius[js[1]], a.radius[js[2]], a.radius[js[3]]);
         const __m256d d0 = _mm256_sub_pd(xi.c[0], xj.c[0]);
         const __m256d d1 = _mm256_sub_pd(xi.c[1], xj.c[1]);
         const __m256d d2 = _mm256_sub_pd(xi.c[2], xj.c[2]);
         const __m256d dist2 =
             _mm256_fmadd_pd(d2, d2, _mm256_fmadd_pd(d1, d1, _mm256_mul_pd(d0, d0)));
-        const __m256d rsum = _mm256_add_pd(ri, rj);
-        const __m256d touch = _mm256_cmp_pd(dist2, _mm256_mul_pd(rsum, rsum), _CMP_LT_OQ);
+        const __m256d touch = _mm256_cmp_pd(dist2, _mm256_loadu_pd(a.rsum2 + k), _CMP_LT_OQ);
         const auto m = static_cast<unsigned>(_mm256_movemask_pd(touch));
         // Only an entry that touched at the last filter and does not now can hold a history to
         // clear (the others that do not touch hold zero): the histories are read and written only

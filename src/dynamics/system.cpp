@@ -260,6 +260,11 @@ void System::index_partners() {
         as_partner_[fill[nb[k]]++] = static_cast<std::uint32_t>(k);
     }
     touched_.assign((nb.size() + 3) / 4, 0x0F); // unknown: the next filter clears as before
+    entry_rsum2_.resize(nb.size());
+    for (std::size_t k = 0; k < nb.size(); ++k) {
+        const double rsum = p_.radius[nl_.owners()[k]] + p_.radius[nb[k]];
+        entry_rsum2_[k] = rsum * rsum;
+    }
     index_bodies();
     rekey_body_contacts(); // the list or the particle order changed
 }
@@ -360,7 +365,8 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
                                   force,
                                   torque,
                                   direct ? nullptr : pair_result_.data(),
-                                  touched_.data()};
+                                  touched_.data(),
+                                  entry_rsum2_.data()};
 #endif
     std::size_t k_first = begin; // entries before it were filtered four at a time
 #if defined(__AVX2__) && defined(__FMA__)
@@ -567,10 +573,10 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
     const auto flush = [&] {
 #ifdef __AVX2__
         // Four at a time in registers, with the register path's variant of the law.
-        const simd::PairArrays arrays{nullptr,          nullptr,        nullptr,
-                                      p_.x.data(),      p_.v.data(),    p_.omega.data(),
-                                      p_.radius.data(), p_.mass.data(), p_.force.data(),
-                                      p_.torque.data(), nullptr,        nullptr};
+        const simd::PairArrays arrays{
+            nullptr,         nullptr,          nullptr,        p_.x.data(),     p_.v.data(),
+            p_.omega.data(), p_.radius.data(), p_.mass.data(), p_.force.data(), p_.torque.data(),
+            nullptr,         nullptr,          nullptr};
         simd::wall_contacts(law, pairs_, p_.material.data(), wall_material_.data(), fn_floor,
                             rolling, dt, geo, active, wall_of, n_active, nw, arrays,
                             wall_shear_.data(), t.energy, t.max_ratio);

@@ -220,6 +220,7 @@ class System {
     // last step's four-entry filter (simd::touching_entries), which clears the histories of those
     // that stopped touching only; all bits set after a list build or a restart (unknown).
     std::vector<std::uint8_t> touched_;
+    std::vector<double> entry_rsum2_; // (r_i + r_j)^2 of each list entry (m^2), set at each build
     int threads_ = 1;
     ContactCounters counters_;
     TimeStepReport ts_;
