@@ -213,7 +213,10 @@ template <class T> struct ContactLanes {
     T v[3], wi[3], wj[3];                            // kinematics
     T e_star, g_star, beta, mu, mu_roll;             // pair properties
     T damping_ratio; // sqrt(4 G*/E*), g_t / g_n of Hertz-Mindlin; read by `shared_damping_root`
-    T s[3];          // history, in/out
+    // Centre difference d (m, world, parallel to n) and 1 / |d|^2 (1/m^2); read by
+    // `project_by_distance` only.
+    T d[3], inv_d2;
+    T s[3];                           // history, in/out
     T f[3], ti[3], tj[3], fn, energy; // results
 };
 
@@ -229,6 +232,10 @@ enum LaneVariant : unsigned {
     /// Hertz-Mindlin's tangential damping from the normal one times `damping_ratio` (set by the
     /// caller): one square root fewer, other round-off (not the same bits as the others).
     shared_damping_root = 4,
+    /// The history is projected on the tangent plane with the centre difference d and 1/|d|^2
+    /// (set by the caller) instead of n: those are known before the square root of the distance,
+    /// so the history's chain starts earlier (other round-off).
+    project_by_distance = 8,
 };
 
 /// Evaluates the law on c; written without branches (variant `branch_free`), so that it runs on
@@ -270,10 +277,18 @@ template <unsigned variant = branch_free, class Law, class T>
     T s1 = c.s[1];
     T s2 = c.s[2];
     const T len2 = s0 * s0 + s1 * s1 + s2 * s2;
-    const T sn = s0 * n0 + s1 * n1 + s2 * n2;
-    s0 -= sn * n0;
-    s1 -= sn * n1;
-    s2 -= sn * n2;
+    if constexpr ((variant & project_by_distance) != 0) {
+        // s - (s.d) d / |d|^2, the same projection as s - (s.n) n.
+        const T sd = (s0 * c.d[0] + s1 * c.d[1] + s2 * c.d[2]) * c.inv_d2;
+        s0 -= sd * c.d[0];
+        s1 -= sd * c.d[1];
+        s2 -= sd * c.d[2];
+    } else {
+        const T sn = s0 * n0 + s1 * n1 + s2 * n2;
+        s0 -= sn * n0;
+        s1 -= sn * n1;
+        s2 -= sn * n2;
+    }
     const T new2 = s0 * s0 + s1 * s1 + s2 * s2;
     // Square roots and divisions are taken of safe arguments and selected afterwards: no branches.
     const T keep_raw = vsqrt(len2 / select(new2 > zero, new2, one));

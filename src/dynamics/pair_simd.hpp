@@ -11,10 +11,12 @@
 #include "contact/contact_law.hpp"
 #include "core/material.hpp"
 #include "core/types.hpp"
+#include "dynamics/wall.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
 
 #ifdef __AVX2__
 #include <immintrin.h>
@@ -109,14 +111,21 @@ struct PairArrays {
     Vec3* force;                ///< forces (N), one thread only
     Vec3* torque;               ///< torques (N m), one thread only
     double* rows;               ///< pair result rows (f, torque_i, torque_j), several threads only
+    /// Per group of four list entries (entry k in group k / 4, bit k % 4): which entries touched
+    /// at the last filter (touching_entries); a set bit where unknown. Bit clear implies a zero
+    /// history.
+    std::uint8_t* touched;
+    const double* rsum2; ///< list entry -> (r_i + r_j)^2 (m^2)
 };
 
 #if defined(__AVX2__) && defined(__FMA__)
 /// The contact filter of System::pair_chunk four list entries at a time, from `begin` while four
 /// remain before `end`: which entries touch (squared distance below the squared radius sum, as
 /// squared_distance), their indices appended to active[n_active..] without a branch, the histories
-/// of the others cleared (bit mask); with `rows` (several threads) the row of each entry, `begin` +
-/// its place among the touching ones or `zero_row`. Returns the first entry not taken.
+/// of the others cleared (bit mask) when one of them touched at the last call (`touched`, whose
+/// group of four entries is updated; `begin` is a multiple of four); with `rows` (several threads)
+/// the row of each entry, `begin` + its place among the touching ones or `zero_row`. Returns the
+/// first entry not taken.
 template <bool with_rows>
 std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t end,
                              std::uint32_t* active, std::size_t& n_active, std::uint32_t* rows,
@@ -129,26 +138,28 @@ std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t
         const std::uint32_t* js = a.nb + k;
         const Columns xi = columns(a.x, is);
         const Columns xj = columns(a.x, js);
-        const __m256d ri =
-            _mm256_setr_pd(a.radius[is[0]], a.radius[is[1]], a.radius[is[2]], a.radius[is[3]]);
-        const __m256d rj =
-            _mm256_setr_pd(a.radius[js[0]], a.radius[js[1]], a.radius[js[2]], a.radius[js[3]]);
         const __m256d d0 = _mm256_sub_pd(xi.c[0], xj.c[0]);
         const __m256d d1 = _mm256_sub_pd(xi.c[1], xj.c[1]);
         const __m256d d2 = _mm256_sub_pd(xi.c[2], xj.c[2]);
         const __m256d dist2 =
             _mm256_fmadd_pd(d2, d2, _mm256_fmadd_pd(d1, d1, _mm256_mul_pd(d0, d0)));
-        const __m256d rsum = _mm256_add_pd(ri, rj);
-        const __m256d touch = _mm256_cmp_pd(dist2, _mm256_mul_pd(rsum, rsum), _CMP_LT_OQ);
-        // Histories of the four entries (12 doubles): each lane's mask spread over its 3
-        // components.
-        double* h = a.shear[k].data();
-        _mm256_storeu_pd(h, _mm256_and_pd(_mm256_loadu_pd(h), _mm256_permute4x64_pd(touch, 0x40)));
-        _mm256_storeu_pd(h + 4,
-                         _mm256_and_pd(_mm256_loadu_pd(h + 4), _mm256_permute4x64_pd(touch, 0xA5)));
-        _mm256_storeu_pd(h + 8,
-                         _mm256_and_pd(_mm256_loadu_pd(h + 8), _mm256_permute4x64_pd(touch, 0xFE)));
+        const __m256d touch = _mm256_cmp_pd(dist2, _mm256_loadu_pd(a.rsum2 + k), _CMP_LT_OQ);
         const auto m = static_cast<unsigned>(_mm256_movemask_pd(touch));
+        // Only an entry that touched at the last filter and does not now can hold a history to
+        // clear (the others that do not touch hold zero): the histories are read and written only
+        // then, not at every step. The four histories (12 doubles) are cleared with each lane's
+        // mask spread over its 3 components.
+        std::uint8_t& was = a.touched[k / 4];
+        if ((was & ~m) != 0U) {
+            double* h = a.shear[k].data();
+            _mm256_storeu_pd(h,
+                             _mm256_and_pd(_mm256_loadu_pd(h), _mm256_permute4x64_pd(touch, 0x40)));
+            _mm256_storeu_pd(
+                h + 4, _mm256_and_pd(_mm256_loadu_pd(h + 4), _mm256_permute4x64_pd(touch, 0xA5)));
+            _mm256_storeu_pd(
+                h + 8, _mm256_and_pd(_mm256_loadu_pd(h + 8), _mm256_permute4x64_pd(touch, 0xFE)));
+        }
+        was = static_cast<std::uint8_t>(m);
         for (unsigned l = 0; l < 4; ++l) {
             const unsigned t = (m >> l) & 1U;
             active[n] = static_cast<std::uint32_t>(k + l);
@@ -241,7 +252,14 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
         // Geometry as in the blocked loop of System::pair_chunk, with three divisions fewer (the
         // divider is the busiest unit here): one for the normal, one shared by R* and m*.
         const V rsum = ri + rj;
-        const V dist = contact::lanes::vsqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        const V d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        if constexpr ((variant & contact::project_by_distance) != 0) {
+            for (int q = 0; q < 3; ++q) {
+                c.d[q] = d[q];
+            }
+            c.inv_d2 = 1.0 / d2;
+        }
+        const V dist = contact::lanes::vsqrt(d2);
         const V overlap = rsum - dist;
         const V inv_dist = 1.0 / dist;
         for (int q = 0; q < 3; ++q) {
@@ -289,6 +307,106 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
     return g;
 }
 
+#ifdef __AVX2__
+/// The sphere-wall contacts of System::wall_unit four at a time on the lanes of a register, with
+/// `variant` of the law (as contact_groups). Contact a is particle active[a] against wall
+/// wall_of[a] (wall material wall_material[wall]) with geometry geo[a] (world frame; the wall is
+/// body j, at rest, of infinite mass); histories in wall_shear[particle * nw + wall] (m). Forces
+/// and torques are added to the particles, energy and max_ratio accumulate, contact by contact in
+/// order. A last group of fewer than four repeats its last contact in the free lanes, whose results
+/// are dropped (a copy of a lane does not change which branch the group takes, so the kept lanes
+/// get the same bits).
+template <unsigned variant, class Law>
+void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
+                 const int* wall_material, double fn_floor, double rolling, double dt,
+                 const WallContact* geo, const std::uint32_t* active, const std::uint32_t* wall_of,
+                 std::size_t n, std::size_t nw, const PairArrays& a, Vec3* wall_shear,
+                 double& energy, double& max_ratio) {
+    constexpr int W = 4;
+    using V = contact::lanes::V4;
+    contact::ContactLanes<V> c{};
+    for (int q = 0; q < 3; ++q) {
+        c.wj[q] = contact::lanes::splat(0.0, c.e_star);
+    }
+    c.lever_j = contact::lanes::splat(0.0, c.e_star);
+    for (std::size_t g = 0; g < n; g += W) {
+        const std::size_t m = std::min<std::size_t>(W, n - g);
+        std::uint32_t is[W];
+        std::uint32_t hs[W];
+        std::size_t as[W];
+        for (int l = 0; l < W; ++l) {
+            as[l] = g + std::min<std::size_t>(static_cast<std::size_t>(l), m - 1);
+            is[l] = active[as[l]];
+            hs[l] = static_cast<std::uint32_t>(is[l] * nw + wall_of[as[l]]);
+            const WallContact& wc = geo[as[l]];
+            for (int q = 0; q < 3; ++q) {
+                c.n[q][l] = wc.n[q];
+            }
+            c.overlap[l] = wc.overlap;
+            c.r_eff[l] = wc.r_eff;
+            c.m_eff[l] = a.mass[is[l]];
+            c.lever_i[l] = a.radius[is[l]] - wc.overlap;
+            const PairProperties& pp = pairs.at(material[is[l]], wall_material[wall_of[as[l]]]);
+            c.e_star[l] = pp.effective_modulus;
+            c.g_star[l] = pp.effective_shear;
+            c.beta[l] = pp.beta;
+            c.mu[l] = pp.friction;
+            c.mu_roll[l] = pp.rolling_friction;
+            if constexpr ((variant & contact::shared_damping_root) != 0) {
+                c.damping_ratio[l] = std::sqrt(4.0 * pp.effective_shear / pp.effective_modulus);
+            }
+        }
+        const Columns v = columns(a.vel, is);
+        const Columns w = columns(a.omega, is);
+        const Columns sh = columns(wall_shear, hs);
+        for (int q = 0; q < 3; ++q) {
+            c.v[q] = v.c[q];
+            c.wi[q] = w.c[q];
+            c.s[q] = sh.c[q];
+        }
+        contact::evaluate_lanes<variant>(law, fn_floor, rolling, c, dt);
+        const RowsXY f = rows_xy(c.f[0], c.f[1]);
+        const RowsXY ti = rows_xy(c.ti[0], c.ti[1]);
+        const RowsXY s = rows_xy(c.s[0], c.s[1]);
+        for (std::size_t l = 0; l < m; ++l) {
+            add_to(a.force[is[l]], f.r[l], c.f[2][l]);
+            add_to(a.torque[is[l]], ti.r[l], c.ti[2][l]);
+            set(wall_shear[hs[l]], s.r[l], c.s[2][l]);
+            energy += c.energy[l];
+            max_ratio = std::max(max_ratio, c.overlap[l] / (2.0 * a.radius[is[l]]));
+        }
+    }
+}
+#endif
+
+/// wall_groups with the variant of contact_groups: the cap only when a lane slides, no rolling
+/// term when there is none, and with one material pair the tangential damping from the normal one.
+template <class Law>
+void wall_contacts(const Law& law, const PairTable& pairs, const std::int32_t* material,
+                   const int* wall_material, double fn_floor, double rolling, double dt,
+                   const WallContact* geo, const std::uint32_t* active,
+                   const std::uint32_t* wall_of, std::size_t n, std::size_t nw, const PairArrays& a,
+                   Vec3* wall_shear, double& energy, double& max_ratio) {
+    using contact::cap_when_sliding;
+    using contact::shared_damping_root;
+    using contact::without_rolling;
+    constexpr unsigned v = cap_when_sliding;
+    constexpr unsigned s = shared_damping_root;
+    constexpr unsigned r = without_rolling;
+    const auto run = [&](auto variant) {
+        wall_groups<decltype(variant)::value>(law, pairs, material, wall_material, fn_floor,
+                                              rolling, dt, geo, active, wall_of, n, nw, a,
+                                              wall_shear, energy, max_ratio);
+    };
+    if (pairs.size() == 1) {
+        rolling == 0.0 ? run(std::integral_constant<unsigned, v | s | r>{})
+                       : run(std::integral_constant<unsigned, v | s>{});
+    } else {
+        rolling == 0.0 ? run(std::integral_constant<unsigned, v | r>{})
+                       : run(std::integral_constant<unsigned, v>{});
+    }
+}
+
 /// contact_groups_as with the variant of the law that has the fewest square roots and divisions:
 /// the Coulomb cap only when a lane slides, no rolling term when there is none (both the same bits)
 /// and, with one material pair, the tangential damping from the normal one (other round-off).
@@ -300,7 +418,7 @@ std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::in
     using contact::cap_when_sliding;
     using contact::shared_damping_root;
     using contact::without_rolling;
-    constexpr unsigned v = cap_when_sliding;
+    constexpr unsigned v = cap_when_sliding | contact::project_by_distance;
     constexpr unsigned s = shared_damping_root;
     constexpr unsigned r = without_rolling;
     if (pairs.size() == 1) {

@@ -54,6 +54,9 @@ System::System(const SceneSpec& spec)
         nl_ = contact::NeighbourList(spec_.skin);
     }
     nl_.set_threads(threads_);
+    for (const Wall& w : spec_.walls) {
+        wall_material_.push_back(w.material);
+    }
     poly_features_.resize(spec_.shapes.size());
     for (std::size_t k = 0; k < spec_.shapes.size(); ++k) {
         if (const auto* ph = std::get_if<geometry::ConvexPolyhedron>(&spec_.shapes[k].shape)) {
@@ -257,6 +260,12 @@ void System::index_partners() {
     for (std::size_t k = 0; k < nb.size(); ++k) {
         as_partner_[fill[nb[k]]++] = static_cast<std::uint32_t>(k);
     }
+    touched_.assign((nb.size() + 3) / 4, 0x0F); // unknown: the next filter clears as before
+    entry_rsum2_.resize(nb.size());
+    for (std::size_t k = 0; k < nb.size(); ++k) {
+        const double rsum = p_.radius[nl_.owners()[k]] + p_.radius[nb[k]];
+        entry_rsum2_[k] = rsum * rsum;
+    }
     index_bodies();
     rekey_body_contacts(); // the list or the particle order changed
 }
@@ -308,6 +317,8 @@ constexpr std::size_t block = 16;               // contacts evaluated together b
 constexpr std::size_t pair_chunk_size = 1024;   // list entries per work unit
 constexpr std::size_t particle_unit_size = 512; // particles per work unit
 constexpr std::size_t row = 9;                  // doubles per pair result: f, torque_i, torque_j
+// The four-entry filter keeps one byte of flags per group of four entries from a chunk's start.
+static_assert(pair_chunk_size % 4 == 0);
 
 // Keeps v when `keep`, else sets it to zero, with a bit mask: written as a multiplication by 0 or 1
 // it became a branch, mispredicted half of the time in the contact filter.
@@ -354,7 +365,9 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
                                   mass,
                                   force,
                                   torque,
-                                  direct ? nullptr : pair_result_.data()};
+                                  direct ? nullptr : pair_result_.data(),
+                                  touched_.data(),
+                                  entry_rsum2_.data()};
 #endif
     std::size_t k_first = begin; // entries before it were filtered four at a time
 #if defined(__AVX2__) && defined(__FMA__)
@@ -556,17 +569,28 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
     std::uint32_t active[capacity];
     std::uint32_t wall_of[capacity];
     std::size_t n_active = 0;
-    contact::ContactBlock<block> c;
-    double ratio[block];
-    for (std::size_t b = 0; b < block; ++b) {
-        c.lever_j[b] = 0.0;
-        for (int q = 0; q < 3; ++q) {
-            c.wj[q][b] = 0.0;
-        }
-    }
 
-    // Evaluates the collected contacts in blocks and adds their forces.
+    // Evaluates the collected contacts and adds their forces.
     const auto flush = [&] {
+#ifdef __AVX2__
+        // Four at a time in registers, with the register path's variant of the law.
+        const simd::PairArrays arrays{
+            nullptr,         nullptr,          nullptr,        p_.x.data(),     p_.v.data(),
+            p_.omega.data(), p_.radius.data(), p_.mass.data(), p_.force.data(), p_.torque.data(),
+            nullptr,         nullptr,          nullptr};
+        simd::wall_contacts(law, pairs_, p_.material.data(), wall_material_.data(), fn_floor,
+                            rolling, dt, geo, active, wall_of, n_active, nw, arrays,
+                            wall_shear_.data(), t.energy, t.max_ratio);
+#else
+        // In blocks with the branch-free law.
+        contact::ContactBlock<block> c;
+        double ratio[block];
+        for (std::size_t b = 0; b < block; ++b) {
+            c.lever_j[b] = 0.0;
+            for (int q = 0; q < 3; ++q) {
+                c.wj[q][b] = 0.0;
+            }
+        }
         for (std::size_t a0 = 0; a0 < n_active; a0 += block) {
             const std::size_t m = std::min(block, n_active - a0);
             for (std::size_t b = 0; b < m; ++b) {
@@ -600,6 +624,7 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
                 t.max_ratio = std::max(t.max_ratio, ratio[b]);
             }
         }
+#endif
         t.contacts += static_cast<long>(n_active);
         n_active = 0;
     };

@@ -206,6 +206,7 @@ class System {
     contact::NeighbourList nl_;
     std::vector<Vec3> wall_shear_; // [particle * n_walls + wall]
     std::vector<std::vector<std::uint32_t>> wall_candidates_;
+    std::vector<int> wall_material_; // material of each analytic wall (spec_.walls order)
     // With more than one thread, pair results go to rows of `pair_result_` (force, torque on i,
     // torque on j; a chunk's touching entries in order from the chunk's first entry index, plus a
     // zero row at the end), `result_row_` maps each entry to its row or to the zero row, and each
@@ -215,6 +216,11 @@ class System {
     std::vector<std::uint32_t> result_row_;
     std::vector<std::uint32_t> as_partner_offsets_, as_partner_;
     std::vector<ChunkTotals> pair_totals_, particle_totals_;
+    // Per group of four list entries (bit k % 4 of byte k / 4): the entries that touched at the
+    // last step's four-entry filter (simd::touching_entries), which clears the histories of those
+    // that stopped touching only; all bits set after a list build or a restart (unknown).
+    std::vector<std::uint8_t> touched_;
+    std::vector<double> entry_rsum2_; // (r_i + r_j)^2 of each list entry (m^2), set at each build
     int threads_ = 1;
     ContactCounters counters_;
     TimeStepReport ts_;

@@ -180,6 +180,23 @@ template <class V, class Law> void lanes_match_one_contact(const Law& law) {
         }
         evaluate_lanes<cap_when_sliding | shared_damping_root>(law, fn_floor, rolling, shared,
                                                                1e-5);
+        // The register path projects the history with the centre difference d and 1/|d|^2
+        // (other round-off): d is n times a distance of a few millimetres.
+        ContactLanes<V> projected = shared;
+        projected.s[0] = lanes.s[0];
+        projected.s[1] = lanes.s[1];
+        projected.s[2] = lanes.s[2];
+        for (int l = 0; l < w; ++l) {
+            const double dist = 3e-3 * (1.0 + 0.5 * u(rng));
+            double d2 = 0.0;
+            for (int q = 0; q < 3; ++q) {
+                projected.d[q][l] = dist * one[l].n[q];
+                d2 += projected.d[q][l] * projected.d[q][l];
+            }
+            projected.inv_d2[l] = 1.0 / d2;
+        }
+        evaluate_lanes<cap_when_sliding | shared_damping_root | project_by_distance>(
+            law, fn_floor, rolling, projected, 1e-5);
         if (rolling == 0.0) {
             evaluate_lanes<cap_when_sliding | without_rolling>(law, fn_floor, rolling, fast, 1e-5);
         } else {
@@ -206,7 +223,7 @@ template <class V, class Law> void lanes_match_one_contact(const Law& law) {
                 const Vec3 y(b[0][l], b[1][l], b[2][l]);
                 EXPECT_LE((x - y).norm(), fused * x.norm()) << "contact " << it << " lane " << l;
             };
-            for (const ContactLanes<V>* r : {&lanes, &shared}) {
+            for (const ContactLanes<V>* r : {&lanes, &shared, &projected}) {
                 near(c.f, r->f);
                 near(c.ti, r->ti);
                 near(c.tj, r->tj);

@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+#include <variant>
+
 namespace kiln::dynamics {
 namespace {
 
@@ -144,6 +147,87 @@ TEST(System, SpheresComeToRestOnAPlane) {
     const double delta = std::pow(m * 9.81 / (4.0 / 3.0 * e_star * std::sqrt(r)), 2.0 / 3.0);
     constexpr double settle = 1e-6; // relative: residual oscillation after 0.5 s of damping
     EXPECT_NEAR(sys.particles().x[0].z(), r - delta, settle * r);
+}
+
+// Wall contacts are evaluated four at a time on vector lanes (simd::wall_groups, a last group
+// padded with copies of its last contact); each must get what the one-contact law gives it, its
+// history carried from one evaluation to the next. Spheres against one, two or three planes and a
+// cylinder, apart from each other; one material (the tangential damping shared with the normal
+// one) and two materials with rolling resistance.
+TEST(System, WallContactsOnLanesMatchOneContactAtATime) {
+    for (const int materials : {1, 2}) {
+        SceneSpec s = base_scene();
+        s.gravity.setZero();
+        if (materials == 2) {
+            s.materials.push_back({"n", 3e7, 0.25, 1500, 0.4, 0.5, 0.02});
+            s.contact.rolling = contact::RollingModel::constant_torque;
+        }
+        const double box = 0.02;
+        for (int a = 0; a < 3; ++a) {
+            s.walls.push_back({"lo", PlaneWall{Vec3::Zero(), Vec3::Unit(a)}, 0});
+            s.walls.push_back(
+                {"hi", PlaneWall{Vec3::Constant(box), -Vec3::Unit(a)}, materials - 1});
+        }
+        s.walls.push_back({"tube", CylinderWall{Vec3(0.01, 0.01, 0), Vec3::UnitZ(), 0.0125}, 0});
+        const double r = 1e-3;
+        const double in = r - 3e-5; // centre distance of a touching sphere from a plane
+        // The cylinder (axis z through (0.01, 0.01), radius 0.0125) cuts the box's vertical edges:
+        // a sphere where it meets x = 0 and z = 0 touches three walls.
+        const double yc = 0.01 + std::sqrt(std::pow(0.0125 - in, 2) - std::pow(0.01 - in, 2));
+        const double dc = (0.0125 - in) / std::sqrt(2.0);
+        const std::vector<Vec3> centres = {
+            {in, 0.01, 0.01}, {0.01, in, 0.01},           {0.01, 0.01, in},
+            {in, 0.01, in},   {box - in, 0.01, box - in}, {0.01, box - in, in},
+            {in, yc, in},     {0.01, 0.01, box - in},     {0.01 + dc, 0.01 + dc, 0.01}};
+        std::mt19937_64 rng(3);
+        std::uniform_real_distribution<double> u(-1.0, 1.0);
+        for (std::size_t k = 0; k < centres.size(); ++k) {
+            s.particles.push_back({static_cast<int>(k % static_cast<std::size_t>(materials)), r,
+                                   centres[k], Vec3(0.2 * u(rng), 0.2 * u(rng), 0.2 * u(rng)),
+                                   Vec3(50 * u(rng), 50 * u(rng), 50 * u(rng))});
+        }
+        System sys(s);
+        const PairTable pairs(s.materials, s.pairs,
+                              s.contact.clamp_normal_force && s.contact.rebound_restitution);
+        std::vector<Vec3> shear(centres.size() * s.walls.size(), Vec3::Zero()); // by id, wall
+        long touching = 0;
+        for (int eval = 0; eval < 3; ++eval) {
+            if (eval > 0) {
+                sys.refresh(); // the same positions, the histories advanced once more
+            }
+            const ParticleStore& p = sys.particles();
+            EXPECT_EQ(sys.counters().particle_contacts, 0);
+            for (std::size_t i = 0; i < p.size(); ++i) {
+                Vec3 f = Vec3::Zero();
+                Vec3 t = Vec3::Zero();
+                for (std::size_t w = 0; w < s.walls.size(); ++w) {
+                    const WallContact g = std::visit(
+                        [&](const auto& shape) { return wall_contact(shape, p.x[i], p.radius[i]); },
+                        s.walls[w].shape);
+                    if (!(g.overlap > 0.0)) {
+                        continue;
+                    }
+                    touching += eval == 0 ? 1 : 0;
+                    const contact::ContactInput c{
+                        g.n, g.overlap, g.r_eff,    p.mass[i],   p.radius[i] - g.overlap,
+                        0.0, p.v[i],    p.omega[i], Vec3::Zero()};
+                    Vec3& h = shear[static_cast<std::size_t>(p.id[i]) * s.walls.size() + w];
+                    const contact::ContactOutput o = contact::evaluate(
+                        contact::HertzMindlin{}, s.contact,
+                        pairs.at(p.material[i], s.walls[w].material), c, h, s.time_step);
+                    f += o.force;
+                    t += o.torque_i;
+                }
+                // Relative: other round-off only (fused multiply-adds, the shared damping root).
+                EXPECT_LE((p.force[i] - f).norm(), 1e-11 * f.norm()) << "particle " << p.id[i];
+                EXPECT_LE((p.torque[i] - t).norm(), 1e-11 * t.norm() + 1e-30)
+                    << "particle " << p.id[i];
+                EXPECT_GT(f.norm(), 0.0);
+            }
+        }
+        EXPECT_EQ(touching, 14); // 1 + 1 + 1 + 2 + 2 + 2 + 3 + 1 + 1: three groups and a tail
+        EXPECT_EQ(sys.counters().wall_contacts, 14);
+    }
 }
 
 // A pour of two materials into a box closed by planes, with a cylinder around it and rolling
