@@ -329,6 +329,22 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
         c.wj[q] = contact::lanes::splat(0.0, c.e_star);
     }
     c.lever_j = contact::lanes::splat(0.0, c.e_star);
+    const bool one_pair = pairs.size() == 1;
+    const auto set_lane = [&c](int l, const PairProperties& pp) {
+        c.e_star[l] = pp.effective_modulus;
+        c.g_star[l] = pp.effective_shear;
+        c.beta[l] = pp.beta;
+        c.mu[l] = pp.friction;
+        c.mu_roll[l] = pp.rolling_friction;
+        if constexpr ((variant & contact::shared_damping_root) != 0) {
+            c.damping_ratio[l] = std::sqrt(4.0 * pp.effective_shear / pp.effective_modulus);
+        }
+    };
+    if (one_pair) {
+        for (int l = 0; l < W; ++l) {
+            set_lane(l, pairs.at(0, 0));
+        }
+    }
     for (std::size_t g = 0; g < n; g += W) {
         const std::size_t m = std::min<std::size_t>(W, n - g);
         std::uint32_t is[W];
@@ -346,14 +362,8 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
             c.r_eff[l] = wc.r_eff;
             c.m_eff[l] = a.mass[is[l]];
             c.lever_i[l] = a.radius[is[l]] - wc.overlap;
-            const PairProperties& pp = pairs.at(material[is[l]], wall_material[wall_of[as[l]]]);
-            c.e_star[l] = pp.effective_modulus;
-            c.g_star[l] = pp.effective_shear;
-            c.beta[l] = pp.beta;
-            c.mu[l] = pp.friction;
-            c.mu_roll[l] = pp.rolling_friction;
-            if constexpr ((variant & contact::shared_damping_root) != 0) {
-                c.damping_ratio[l] = std::sqrt(4.0 * pp.effective_shear / pp.effective_modulus);
+            if (!one_pair) {
+                set_lane(l, pairs.at(material[is[l]], wall_material[wall_of[as[l]]]));
             }
         }
         const Columns v = columns(a.vel, is);
@@ -379,62 +389,50 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
 }
 #endif
 
-/// wall_groups with the variant of contact_groups: the cap only when a lane slides, no rolling
-/// term when there is none, and with one material pair the tangential damping from the normal one.
+/// Calls run(std::integral_constant<unsigned, V>{}) with the variant V of the law that has the
+/// fewest square roots and divisions for the scene: `base` (the Coulomb cap only when a lane
+/// slides, and what else the caller adds), no rolling term when there is none (the same bits) and,
+/// with one material pair, the tangential damping from the normal one (other round-off).
+template <unsigned base, class Run>
+decltype(auto) with_cheapest_variant(const PairTable& pairs, double rolling, Run&& run) {
+    constexpr unsigned s = contact::shared_damping_root;
+    constexpr unsigned r = contact::without_rolling;
+    if (pairs.size() == 1) {
+        return rolling == 0.0 ? run(std::integral_constant<unsigned, base | s | r>{})
+                              : run(std::integral_constant<unsigned, base | s>{});
+    }
+    return rolling == 0.0 ? run(std::integral_constant<unsigned, base | r>{})
+                          : run(std::integral_constant<unsigned, base>{});
+}
+
+/// wall_groups with the cheapest variant of the law (with_cheapest_variant; the walls give no
+/// centre difference, so the history is projected with n).
 template <class Law>
 void wall_contacts(const Law& law, const PairTable& pairs, const std::int32_t* material,
                    const int* wall_material, double fn_floor, double rolling, double dt,
                    const WallContact* geo, const std::uint32_t* active,
                    const std::uint32_t* wall_of, std::size_t n, std::size_t nw, const PairArrays& a,
                    Vec3* wall_shear, double& energy, double& max_ratio) {
-    using contact::cap_when_sliding;
-    using contact::shared_damping_root;
-    using contact::without_rolling;
-    constexpr unsigned v = cap_when_sliding;
-    constexpr unsigned s = shared_damping_root;
-    constexpr unsigned r = without_rolling;
-    const auto run = [&](auto variant) {
+    with_cheapest_variant<contact::cap_when_sliding>(pairs, rolling, [&](auto variant) {
         wall_groups<decltype(variant)::value>(law, pairs, material, wall_material, fn_floor,
                                               rolling, dt, geo, active, wall_of, n, nw, a,
                                               wall_shear, energy, max_ratio);
-    };
-    if (pairs.size() == 1) {
-        rolling == 0.0 ? run(std::integral_constant<unsigned, v | s | r>{})
-                       : run(std::integral_constant<unsigned, v | s>{});
-    } else {
-        rolling == 0.0 ? run(std::integral_constant<unsigned, v | r>{})
-                       : run(std::integral_constant<unsigned, v>{});
-    }
+    });
 }
 
-/// contact_groups_as with the variant of the law that has the fewest square roots and divisions:
-/// the Coulomb cap only when a lane slides, no rolling term when there is none (both the same bits)
-/// and, with one material pair, the tangential damping from the normal one (other round-off).
+/// contact_groups_as with the cheapest variant of the law (with_cheapest_variant), the history
+/// projected with the centre difference.
 template <class Law, bool direct>
 std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
                            double fn_floor, double rolling, double dt, const PairArrays& a,
                            const std::uint32_t* active, std::size_t n, std::size_t first_row,
                            double& energy, double& max_ratio) {
-    using contact::cap_when_sliding;
-    using contact::shared_damping_root;
-    using contact::without_rolling;
-    constexpr unsigned v = cap_when_sliding | contact::project_by_distance;
-    constexpr unsigned s = shared_damping_root;
-    constexpr unsigned r = without_rolling;
-    if (pairs.size() == 1) {
-        return rolling == 0.0
-                   ? contact_groups_as<v | s | r, Law, direct>(law, pairs, material, fn_floor,
-                                                               rolling, dt, a, active, n, first_row,
-                                                               energy, max_ratio)
-                   : contact_groups_as<v | s, Law, direct>(law, pairs, material, fn_floor, rolling,
-                                                           dt, a, active, n, first_row, energy,
-                                                           max_ratio);
-    }
-    return rolling == 0.0
-               ? contact_groups_as<v | r, Law, direct>(law, pairs, material, fn_floor, rolling, dt,
-                                                       a, active, n, first_row, energy, max_ratio)
-               : contact_groups_as<v, Law, direct>(law, pairs, material, fn_floor, rolling, dt, a,
-                                                   active, n, first_row, energy, max_ratio);
+    constexpr unsigned base = contact::cap_when_sliding | contact::project_by_distance;
+    return with_cheapest_variant<base>(pairs, rolling, [&](auto variant) {
+        return contact_groups_as<decltype(variant)::value, Law, direct>(
+            law, pairs, material, fn_floor, rolling, dt, a, active, n, first_row, energy,
+            max_ratio);
+    });
 }
 #endif
 
