@@ -617,7 +617,7 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
     Element e{Element::Kind::polyhedron, x, r, nullptr, q, features->inradius};
     e.poly = features;
     e.hull = &hull;
-    e.r_equiv = features->r_equiv > 0.0 ? features->r_equiv : equivalent_radius(*t);
+    e.r_equiv = features->r_equiv;
     out.push_back(e);
 }
 

@@ -61,7 +61,6 @@ System::System(const SceneSpec& spec)
     for (std::size_t k = 0; k < spec_.shapes.size(); ++k) {
         if (const auto* ph = std::get_if<geometry::ConvexPolyhedron>(&spec_.shapes[k].shape)) {
             poly_features_[k] = geometry::polyhedron_features(*ph);
-            poly_features_[k].r_equiv = equivalent_radius(spec_.shapes[k]);
         }
     }
     for (const auto& ps : spec_.particles) {

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <numeric>
 
 namespace kiln::geometry {
@@ -92,6 +93,9 @@ PolyhedronFeatures polyhedron_features(const ConvexPolyhedron& p) {
     for (const double o : f.face_offsets) {
         f.inradius = std::min(f.inradius, o);
     }
+    // Volume-equivalent radius, the expression of dynamics::equivalent_radius (the template's
+    // volume is the polyhedron's).
+    f.r_equiv = std::cbrt(3.0 * p.volume / (4.0 * std::numbers::pi));
     for (const auto& e : p.edges) {
         const auto t0 = tri_of.find({e[0], e[1]});
         const auto t1 = tri_of.find({e[1], e[0]});

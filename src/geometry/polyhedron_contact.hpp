@@ -45,8 +45,8 @@ struct PolyhedronFeatures {
     std::vector<std::array<int, 4>> edges; ///< feature edges: vertices v0, v1, faces f0, f1
     double radius = 0.0;                   ///< distance of the farthest vertex from the origin (m)
     double inradius = 0.0;                 ///< smallest face offset (m): the inscribed radius
-    /// Volume-equivalent sphere radius of the template (m), set by the owner of the template
-    /// (dynamics::System) so the step loop does not take a cube root per body and step; 0: unset.
+    /// Volume-equivalent sphere radius (m), kept so the step loop does not take a cube root per
+    /// body and step.
     double r_equiv = 0.0;
 
     /// Support point (m, body frame): the vertex maximising d . x for a body-frame direction d.
