@@ -202,7 +202,19 @@ int run_case(const io::CaseSpec& spec, const RunOptions& opt) {
                 interrupted = true;
                 break;
             }
-            sys->step();
+            // The steps up to the next one whose state is read (finite check, monitors, frames,
+            // checkpoints; heat reads every step) in one call, so that the integrator can fuse its
+            // passes over the particles between them. A stop request waits at most
+            // finite_check_every steps.
+            const long s0 = sys->step_count();
+            long run =
+                heat ? 1 : std::min(total, (s0 / finite_check_every + 1) * finite_check_every) - s0;
+            for (const long every_n : {mon_every, vtk_every, ckp_every}) {
+                if (every_n > 0) {
+                    run = std::min(run, (s0 / every_n + 1) * every_n - s0);
+                }
+            }
+            sys->advance(run);
             if (heat) {
                 const auto h0 = std::chrono::steady_clock::now();
                 heat->after_step(*sys);

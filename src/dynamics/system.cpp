@@ -709,7 +709,7 @@ void System::note_body_onset(const BodyContactKey& key, const Vec3& n, const Vec
     onsets_.push_back(e);
 }
 
-void System::compute_forces(bool kick_requested) {
+void System::compute_forces(bool kick_requested, bool forces_cleared) {
     // With bodies, their contacts are added after the sphere loop (body_forces), so the kick waits.
     const bool kick = kick_requested && !generic_contacts();
     const std::size_t n = p_.size();
@@ -735,7 +735,9 @@ void System::compute_forces(bool kick_requested) {
         }
     }
     if (direct) {
-        p_.clear_forces();
+        if (!forces_cleared) {
+            p_.clear_forces();
+        }
     } else {
         pair_result_.resize(row * (entries + 1));
         std::fill_n(pair_result_.end() - row, row, 0.0); // the zero row
@@ -857,26 +859,67 @@ void System::compute_forces(bool kick_requested) {
         std::max({counters_.max_overlap_ratio, body_pairs.max_ratio, body_walls.max_ratio});
 }
 
-void System::step() {
+// Half kicks, drift and displacement check of the particles [p0, p1) in one pass. kicks = 2 is the
+// second half kick of the last step followed by the first of this one, each rounded as its own
+// pass (half_kick) rounds it, so the bits are those of two passes. With `clear`, forces and torques
+// are zeroed after their last read. Returns 1 when a particle moved more than half the skin since
+// the list build (squared distance above lim2, m^2).
+template <int kicks, bool clear>
+int System::kick_drift(std::size_t p0, std::size_t p1, bool same_size, double lim2) {
+    const double dt = spec_.time_step;
+    const double h = 0.5 * dt;
+    const Vec3 g = spec_.gravity;
+    Vec3* __restrict x = p_.x.data();
+    Vec3* __restrict v = p_.v.data();
+    Vec3* __restrict w = p_.omega.data();
+    Vec3* __restrict f = p_.force.data();
+    Vec3* __restrict t = p_.torque.data();
+    const double* __restrict inv_m = p_.inv_mass.data();
+    const double* __restrict inv_i = p_.inv_inertia.data();
+    const Vec3* __restrict x_build = nl_.positions_at_build().data();
+    int moved = 0;
+    for (std::size_t i = p0; i < p1; ++i) {
+        for (int k = 0; k < kicks; ++k) {
+            v[i] += h * (f[i] * inv_m[i] + g);
+            w[i] += h * inv_i[i] * t[i];
+        }
+        if constexpr (clear) {
+            f[i].setZero();
+            t[i].setZero();
+        }
+        x[i] += dt * v[i];
+        moved |= same_size && (x[i] - x_build[i]).squaredNorm() > lim2 ? 1 : 0;
+    }
+    return moved;
+}
+
+// The start of a step: `kicks` half kicks (1, or 2 when the last step left its second one to this
+// pass), drift, displacement check and, on one thread without bodies or mesh walls, the clearing of
+// forces and torques, in one pass; bodies rotate; the list is rebuilt when a particle moved more
+// than half the skin. Returns whether the forces and torques were cleared.
+bool System::begin_step(int kicks) {
     if (!list_valid_) {
         rebuild_neighbours();
     }
-    const double dt = spec_.time_step;
     const std::size_t n = p_.size();
-    // Kick and drift; the displacement since the last list build is checked on the way.
-    const std::vector<Vec3>& x_build = nl_.positions_at_build();
-    const bool same_size = x_build.size() == n && nl_.offsets().size() == n + 1;
+    const bool same_size = nl_.positions_at_build().size() == n && nl_.offsets().size() == n + 1;
     const double lim2 = 0.25 * nl_.skin() * nl_.skin();
     const std::size_t units = (n + particle_unit_size - 1) / particle_unit_size;
+    // Bodies and mesh walls add their forces after the sphere loop (body_forces), which clears
+    // nothing; with several threads the particle sums set the forces.
+    const bool clear = threads_ == 1 && !generic_contacts();
+    KILN_ASSERT(kicks == 1 || (kicks == 2 && !generic_contacts()));
     int moved = same_size ? 0 : 1;
 #pragma omp parallel for num_threads(threads_) schedule(static) reduction(| : moved)
     for (std::size_t u = 0; u < units; ++u) {
         const std::size_t p0 = u * particle_unit_size;
         const std::size_t p1 = std::min(n, p0 + particle_unit_size);
-        half_kick(p0, p1);
-        for (std::size_t i = p0; i < p1; ++i) {
-            p_.x[i] += dt * p_.v[i];
-            moved |= same_size && (p_.x[i] - x_build[i]).squaredNorm() > lim2 ? 1 : 0;
+        if (kicks == 2) {
+            moved |= clear ? kick_drift<2, true>(p0, p1, same_size, lim2)
+                           : kick_drift<2, false>(p0, p1, same_size, lim2);
+        } else {
+            moved |= clear ? kick_drift<1, true>(p0, p1, same_size, lim2)
+                           : kick_drift<1, false>(p0, p1, same_size, lim2);
         }
     }
     if (has_bodies_) {
@@ -885,9 +928,32 @@ void System::step() {
     if (moved != 0) {
         rebuild_neighbours();
     }
-    compute_forces(true);
+    return clear;
+}
+
+void System::step() {
+    const bool cleared = begin_step(1);
+    compute_forces(true, cleared);
     ++step_;
-    time_ = static_cast<double>(step_) * dt;
+    time_ = static_cast<double>(step_) * spec_.time_step;
+}
+
+void System::advance(long steps) {
+    // Bodies and mesh walls kick after body_forces, and recorded onsets are read after each step.
+    if (steps < 2 || generic_contacts() || spec_.record_contact_onsets) {
+        for (long s = 0; s < steps; ++s) {
+            step();
+        }
+        return;
+    }
+    for (long s = 0; s < steps; ++s) {
+        const bool last = s + 1 == steps;
+        // The second half kick of every step but the last waits for the next step's pass.
+        const bool cleared = begin_step(s == 0 ? 1 : 2);
+        compute_forces(last, cleared);
+        ++step_;
+        time_ = static_cast<double>(step_) * spec_.time_step;
+    }
 }
 
 void System::collect_contacts(std::vector<ContactRecord>& out) const {

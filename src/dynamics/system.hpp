@@ -98,6 +98,12 @@ class System {
 
     /// Advances one mechanical step of length dt.
     void step();
+    /// Advances `steps` mechanical steps of length dt and returns with the state (world frame) of
+    /// as many calls of step(), bit for bit. Nothing outside reads the state between these steps,
+    /// so for spheres with analytic walls (no bodies, no mesh walls, no contact onsets recorded)
+    /// the second half kick of one step, the first of the next, the drift, the displacement check
+    /// and the clearing of forces and torques are made in one pass over the particles.
+    void advance(long steps);
 
     /// Particle data (world frame).
     [[nodiscard]] const ParticleStore& particles() const { return p_; }
@@ -189,7 +195,10 @@ class System {
     void rotate_bodies(bool drift);
     void index_bodies();
     void check_time_step();
-    void compute_forces(bool kick_requested = false);
+    void compute_forces(bool kick_requested = false, bool forces_cleared = false);
+    bool begin_step(int kicks);
+    template <int kicks, bool clear>
+    int kick_drift(std::size_t p0, std::size_t p1, bool same_size, double lim2);
     template <class Law, bool direct, bool bodies, bool onsets = false>
     void pair_chunk(const Law& law, std::size_t begin, std::size_t end, ChunkTotals& t);
     void sum_pair_results(std::size_t i);
