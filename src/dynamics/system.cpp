@@ -859,11 +859,77 @@ void System::compute_forces(bool kick_requested, bool forces_cleared) {
         std::max({counters_.max_overlap_ratio, body_pairs.max_ratio, body_walls.max_ratio});
 }
 
+namespace {
+
+#if defined(__AVX2__) && defined(__FMA__)
+// An empty asm makes a value opaque to the compiler, so that a product is rounded before the sum
+// that follows it (no fused multiply-add: the scalar code's rounding, see kick_drift_four).
+inline __m256d rounded(__m256d a) {
+    asm("" : "+x"(a));
+    return a;
+}
+
+// kick_drift on four particles, whose Vec3 records are twelve consecutive doubles: three registers
+// per field, lane pattern (x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3). Per-particle scalars are
+// spread to that pattern; every double sees the operations of the scalar loop in the same order
+// (the same fused multiply-adds, as GCC contracts that loop): v = fma(h, fma(f, 1/m, g), v) per
+// kick, w = fma(h / I, t, w), x = fma(dt, v, x); the squared displacement is fma(dz, dz, dx dx + dy
+// dy) with both products rounded. Returns the mask of the particles that moved more than
+// sqrt(lim2).
+template <int kicks, bool clear>
+inline unsigned kick_drift_four(double* __restrict x, double* __restrict v, double* __restrict w,
+                                double* __restrict f, double* __restrict t,
+                                const double* __restrict inv_m, const double* __restrict inv_i,
+                                const double* __restrict x_build, double h, double dt,
+                                const __m256d g[3], __m256d lim2) {
+    const __m256d m4 = _mm256_loadu_pd(inv_m);
+    const __m256d hi4 = _mm256_mul_pd(_mm256_set1_pd(h), _mm256_loadu_pd(inv_i));
+    const __m256d m[3] = {_mm256_permute4x64_pd(m4, 0x40), _mm256_permute4x64_pd(m4, 0xA5),
+                          _mm256_permute4x64_pd(m4, 0xFE)};
+    const __m256d hi[3] = {_mm256_permute4x64_pd(hi4, 0x40), _mm256_permute4x64_pd(hi4, 0xA5),
+                           _mm256_permute4x64_pd(hi4, 0xFE)};
+    const __m256d hh = _mm256_set1_pd(h);
+    const __m256d dd = _mm256_set1_pd(dt);
+    __m256d d[3];
+    for (int r = 0; r < 3; ++r) {
+        const __m256d a = _mm256_fmadd_pd(_mm256_loadu_pd(f + 4 * r), m[r], g[r]);
+        __m256d vr = _mm256_loadu_pd(v + 4 * r);
+        __m256d wr = _mm256_loadu_pd(w + 4 * r);
+        const __m256d tr = _mm256_loadu_pd(t + 4 * r);
+        for (int k = 0; k < kicks; ++k) {
+            vr = _mm256_fmadd_pd(hh, a, vr);
+            wr = _mm256_fmadd_pd(hi[r], tr, wr);
+        }
+        _mm256_storeu_pd(v + 4 * r, vr);
+        _mm256_storeu_pd(w + 4 * r, wr);
+        if constexpr (clear) {
+            _mm256_storeu_pd(f + 4 * r, _mm256_setzero_pd());
+            _mm256_storeu_pd(t + 4 * r, _mm256_setzero_pd());
+        }
+        const __m256d xr = _mm256_fmadd_pd(dd, vr, _mm256_loadu_pd(x + 4 * r));
+        _mm256_storeu_pd(x + 4 * r, xr);
+        d[r] = _mm256_sub_pd(xr, _mm256_loadu_pd(x_build + 4 * r));
+    }
+    // Columns of d: (x0 y0 x2 y2), (y1 z1 y3 z3), (z0 x1 z2 x3), then x, y and z of the four.
+    const __m256d t0 = _mm256_blend_pd(d[0], d[1], 0b1100);
+    const __m256d t1 = _mm256_blend_pd(d[1], d[2], 0b1100);
+    const __m256d t2 = _mm256_permute2f128_pd(d[0], d[2], 0x21);
+    const __m256d dx = _mm256_blend_pd(t0, t2, 0b1010);
+    const __m256d dy = _mm256_shuffle_pd(t0, t1, 0b0101);
+    const __m256d dz = _mm256_blend_pd(t2, t1, 0b1010);
+    const __m256d s2 = _mm256_fmadd_pd(
+        dz, dz, _mm256_add_pd(rounded(_mm256_mul_pd(dx, dx)), rounded(_mm256_mul_pd(dy, dy))));
+    return static_cast<unsigned>(_mm256_movemask_pd(_mm256_cmp_pd(s2, lim2, _CMP_GT_OQ)));
+}
+#endif
+
+} // namespace
+
 // Half kicks, drift and displacement check of the particles [p0, p1) in one pass. kicks = 2 is the
 // second half kick of the last step followed by the first of this one, each rounded as its own
 // pass (half_kick) rounds it, so the bits are those of two passes. With `clear`, forces and torques
 // are zeroed after their last read. Returns 1 when a particle moved more than half the skin since
-// the list build (squared distance above lim2, m^2).
+// the list build (squared distance above lim2, m^2). Four particles at a time with AVX2.
 template <int kicks, bool clear>
 int System::kick_drift(std::size_t p0, std::size_t p1, bool same_size, double lim2) {
     const double dt = spec_.time_step;
@@ -877,20 +943,45 @@ int System::kick_drift(std::size_t p0, std::size_t p1, bool same_size, double li
     const double* __restrict inv_m = p_.inv_mass.data();
     const double* __restrict inv_i = p_.inv_inertia.data();
     const Vec3* __restrict x_build = nl_.positions_at_build().data();
-    int moved = 0;
-    for (std::size_t i = p0; i < p1; ++i) {
-        for (int k = 0; k < kicks; ++k) {
-            v[i] += h * (f[i] * inv_m[i] + g);
-            w[i] += h * inv_i[i] * t[i];
+    unsigned moved = 0;
+    std::size_t i = p0;
+#if defined(__AVX2__) && defined(__FMA__)
+    static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 records are packed");
+    if (same_size) {
+        const __m256d gl[3] = {_mm256_setr_pd(g[0], g[1], g[2], g[0]),
+                               _mm256_setr_pd(g[1], g[2], g[0], g[1]),
+                               _mm256_setr_pd(g[2], g[0], g[1], g[2])};
+        const __m256d l2 = _mm256_set1_pd(lim2);
+        for (; i + 4 <= p1; i += 4) {
+            moved |= kick_drift_four<kicks, clear>(x[i].data(), v[i].data(), w[i].data(),
+                                                   f[i].data(), t[i].data(), inv_m + i, inv_i + i,
+                                                   x_build[i].data(), h, dt, gl, l2);
         }
+    }
+#endif
+    for (; i < p1; ++i) {
+        // Copies in registers: through memory, each kick waited for the last one's store.
+        Vec3 vi = v[i];
+        Vec3 wi = w[i];
+        const Vec3 fi = f[i];
+        const Vec3 ti = t[i];
+        const double mi = inv_m[i];
+        const double hi = h * inv_i[i];
+        for (int k = 0; k < kicks; ++k) {
+            vi += h * (fi * mi + g);
+            wi += hi * ti;
+        }
+        v[i] = vi;
+        w[i] = wi;
         if constexpr (clear) {
             f[i].setZero();
             t[i].setZero();
         }
-        x[i] += dt * v[i];
-        moved |= same_size && (x[i] - x_build[i]).squaredNorm() > lim2 ? 1 : 0;
+        const Vec3 xi = x[i] + dt * vi;
+        x[i] = xi;
+        moved |= same_size && (xi - x_build[i]).squaredNorm() > lim2 ? 1U : 0U;
     }
-    return moved;
+    return moved != 0 ? 1 : 0;
 }
 
 // The start of a step: `kicks` half kicks (1, or 2 when the last step left its second one to this
