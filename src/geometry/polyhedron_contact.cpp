@@ -171,22 +171,6 @@ void relative_arcs(const PolyhedronFeatures& fb, Relative& r) {
     }
 }
 
-double min_dot(const std::vector<Vec3>& pts, const Vec3& n) {
-    double m = std::numeric_limits<double>::infinity();
-    for (const Vec3& p : pts) {
-        m = std::min(m, n.dot(p));
-    }
-    return m;
-}
-
-double max_dot(const std::vector<Vec3>& pts, const Vec3& n) {
-    double m = -std::numeric_limits<double>::infinity();
-    for (const Vec3& p : pts) {
-        m = std::max(m, n.dot(p));
-    }
-    return m;
-}
-
 /// Gauss-map test of Gregorius (2013): do the arcs (a, b) of A's edge and (c, d) of B's negated
 /// edge cross, i.e. does the edge pair span a face of the Minkowski difference?
 bool is_minkowski_face(const Vec3& a, const Vec3& b, const Vec3& bxa, const Vec3& c, const Vec3& d,
@@ -280,12 +264,31 @@ void add_unique(std::vector<Vec3>& pts, const Vec3& p, double tol2) {
 /// Depth along the normal m (unit, from B to A, A's body frame) as the patch takes it: the
 /// distance between the deepest vertices of A and B along m (m).
 struct PlaneDepth {
-    double d_a; // min over A's vertices of m . x (m)
-    double d_b; // max over B's vertices of m . x (m)
+    double d_a;            // min over A's vertices of m . x (m)
+    double d_b;            // max over B's vertices of m . x (m)
+    std::size_t deepest_a; // a vertex of A where d_a is reached (the first)
+    std::size_t deepest_b; // a vertex of B where d_b is reached (the first)
 };
 
 PlaneDepth plane_depth(const PolyhedronFeatures& fa, const Relative& r, const Vec3& m) {
-    return {min_dot(fa.vertices, m), max_dot(r.vb, m)};
+    // m . x over each body's vertices: the extremes and where they are first reached.
+    PlaneDepth p{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                 0, 0};
+    for (std::size_t i = 0; i < fa.vertices.size(); ++i) {
+        const double h = m.dot(fa.vertices[i]);
+        if (h < p.d_a) {
+            p.d_a = h;
+            p.deepest_a = i;
+        }
+    }
+    for (std::size_t j = 0; j < r.vb.size(); ++j) {
+        const double h = m.dot(r.vb[j]);
+        if (h > p.d_b) {
+            p.d_b = h;
+            p.deepest_b = j;
+        }
+    }
+    return p;
 }
 
 /// Points and patch for the normal m (unit, from B to A), all in A's body frame; the result's
@@ -296,7 +299,9 @@ PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b,
     const PolyhedronFeatures& fb = *b.shape;
     const double scale = fa.radius + fb.radius;
     PolyhedronContact c;
-    const auto [d_a, d_b] = plane_depth(fa, r, m);
+    const PlaneDepth pd = plane_depth(fa, r, m);
+    const double d_a = pd.d_a;
+    const double d_b = pd.d_b;
     c.depth = d_b - d_a;
     c.touching = c.depth > 0.0;
     const double s = 0.5 * (d_a + d_b);
@@ -581,11 +586,13 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
     if (need_patch != nullptr) {
         // The depth as the patch would give it (its own vertex loops), so the numbers do not
         // depend on the decision.
-        const auto [d_a, d_b] = plane_depth(fa, r, best_m);
-        c.depth = d_b - d_a;
+        const PlaneDepth pd = plane_depth(fa, r, best_m);
+        c.depth = pd.d_b - pd.d_a;
         c.touching = c.depth > 0.0;
         c.normal = a.q * best_m;
-        c.point = 0.5 * (a.support(-c.normal) + b.support(c.normal));
+        // The deepest vertices of the loops above (A's frame; B's already turned into it), not
+        // two more support searches.
+        c.point = a.x + a.q * (0.5 * (fa.vertices[pd.deepest_a] + r.vb[pd.deepest_b]));
         if (!(*need_patch)(c)) {
             return c;
         }
