@@ -360,7 +360,11 @@ ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase m
     // Separating-axis shortcuts: last step's separating direction, then the line of centres (two
     // support evaluations each). A pair that touched at the last step almost always touches
     // again, so it goes straight to the exact query, which finds a pair apart too.
-    if (cached_apart(pa, pb, a.radius + b.radius, sep)) {
+    // The cached direction's gap from heights alone (polyhedron_overlap_along): equal to the
+    // support points' form to round-off, far below the margin, so the same pairs are proved apart.
+    if (sep != nullptr && sep->squaredNorm() > 0.0 &&
+        geometry::polyhedron_overlap_along(pa, pb, *sep) <
+            -kSeparationMargin * (a.radius + b.radius)) {
         out.proved_apart = true;
         return out;
     }
@@ -391,15 +395,25 @@ ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase m
     } else {
         // The patch only where pair_point reads it (face on face): the same numbers as with it.
         // (The plane's normal and depth are those of the result, so the lists serve pair_point.)
-        pc = geometry::polyhedron_contact(pa, pb, [&](const geometry::PolyhedronContact& c) {
-            if (!c.touching) {
-                return false;
-            }
-            near_support(pa, -c.normal, c.depth, va);
-            near_support(pb, c.normal, c.depth, vb);
-            near_known = true;
-            return pair_point_needs_patch(va, vb);
-        });
+        // One pointer captured, so the std::function keeps the test in its own storage (a
+        // capture of five references took a heap allocation per query).
+        struct Near {
+            const geometry::PosedPolyhedron& pa;
+            const geometry::PosedPolyhedron& pb;
+            std::vector<std::pair<Vec3, double>>& va;
+            std::vector<std::pair<Vec3, double>>& vb;
+            bool& known;
+        } near{pa, pb, va, vb, near_known};
+        pc =
+            geometry::polyhedron_contact(pa, pb, [n = &near](const geometry::PolyhedronContact& c) {
+                if (!c.touching) {
+                    return false;
+                }
+                near_support(n->pa, -c.normal, c.depth, n->va);
+                near_support(n->pb, c.normal, c.depth, n->vb);
+                n->known = true;
+                return pair_point_needs_patch(n->va, n->vb);
+            });
         out.converged = pc.converged;
         if (pc.converged && !pc.touching && pc.depth < 0.0 && sep != nullptr) {
             *sep = pc.normal; // the common plane of the largest gap

@@ -607,6 +607,20 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
 
 } // namespace
 
+double polyhedron_overlap_along(const PosedPolyhedron& a, const PosedPolyhedron& b, const Vec3& m) {
+    const Vec3 mb = b.q.conjugate() * m;
+    const Vec3 ma = a.q.conjugate() * m;
+    double hb = -std::numeric_limits<double>::infinity();
+    for (const Vec3& v : b.shape->vertices) {
+        hb = std::max(hb, mb.dot(v));
+    }
+    double ha = -std::numeric_limits<double>::infinity();
+    for (const Vec3& v : a.shape->vertices) {
+        ha = std::max(ha, -ma.dot(v));
+    }
+    return m.dot(b.x - a.x) + hb + ha;
+}
+
 PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b,
                                      bool with_patch) {
     return common_plane(a, b, with_patch, nullptr);
