@@ -257,9 +257,11 @@ void near_support(const geometry::PosedPolyhedron& p, const Vec3& d, double over
     }
     const double band = kTieBand * overlap;
     for (const Vec3& v : p.shape->vertices) {
-        const double w = 1.0 - (top - db.dot(v)) / band;
-        if (w > 0.0) {
-            out.emplace_back(p.x + p.q * v, w);
+        // below < band exactly when the rounded 1 - below / band is positive (band > 0: a
+        // quotient below 1 rounds to at most 1 - 2^-53), so the division runs only in the band.
+        const double below = top - db.dot(v);
+        if (below < band) {
+            out.emplace_back(p.x + p.q * v, 1.0 - below / band);
         }
     }
 }
@@ -348,19 +350,26 @@ double polyhedron_pair_radius(const Element& a, const Element& b) {
 }
 
 /// Two polyhedron elements: fast common plane (default) or libccd GJK/EPA with the common-plane
-/// patch along EPA's normal. Normal from b to a; point: pair_point.
-ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase method, Vec3* sep) {
+/// patch along EPA's normal. Normal from b to a; point: pair_point. `touched_last`: see
+/// element_contact.
+ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase method, Vec3* sep,
+                               bool touched_last) {
     ElementContact out;
     const geometry::PosedPolyhedron pa{a.poly, a.centre, a.q};
     const geometry::PosedPolyhedron pb{b.poly, b.centre, b.q};
     // Separating-axis shortcuts: last step's separating direction, then the line of centres (two
-    // support evaluations each).
-    if (cached_apart(pa, pb, a.radius + b.radius, sep)) {
+    // support evaluations each). A pair that touched at the last step almost always touches
+    // again, so it goes straight to the exact query, which finds a pair apart too.
+    // The cached direction's gap from heights alone (polyhedron_overlap_along): equal to the
+    // support points' form to round-off, far below the margin, so the same pairs are proved apart.
+    if (sep != nullptr && sep->squaredNorm() > 0.0 &&
+        geometry::polyhedron_overlap_along(pa, pb, *sep) <
+            -kSeparationMargin * (a.radius + b.radius)) {
         out.proved_apart = true;
         return out;
     }
     const Vec3 line = a.centre - b.centre;
-    if (line.squaredNorm() > 0.0) {
+    if (!touched_last && line.squaredNorm() > 0.0) {
         const Vec3 m = line.normalized();
         if (m.dot(pb.support(m)) - m.dot(pa.support(-m)) < 0.0) {
             if (sep != nullptr) {
@@ -386,15 +395,25 @@ ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase m
     } else {
         // The patch only where pair_point reads it (face on face): the same numbers as with it.
         // (The plane's normal and depth are those of the result, so the lists serve pair_point.)
-        pc = geometry::polyhedron_contact(pa, pb, [&](const geometry::PolyhedronContact& c) {
-            if (!c.touching) {
-                return false;
-            }
-            near_support(pa, -c.normal, c.depth, va);
-            near_support(pb, c.normal, c.depth, vb);
-            near_known = true;
-            return pair_point_needs_patch(va, vb);
-        });
+        // One pointer captured, so the std::function keeps the test in its own storage (a
+        // capture of five references took a heap allocation per query).
+        struct Near {
+            const geometry::PosedPolyhedron& pa;
+            const geometry::PosedPolyhedron& pb;
+            std::vector<std::pair<Vec3, double>>& va;
+            std::vector<std::pair<Vec3, double>>& vb;
+            bool& known;
+        } near{pa, pb, va, vb, near_known};
+        pc =
+            geometry::polyhedron_contact(pa, pb, [n = &near](const geometry::PolyhedronContact& c) {
+                if (!c.touching) {
+                    return false;
+                }
+                near_support(n->pa, -c.normal, c.depth, n->va);
+                near_support(n->pb, c.normal, c.depth, n->vb);
+                n->known = true;
+                return pair_point_needs_patch(n->va, n->vb);
+            });
         out.converged = pc.converged;
         if (pc.converged && !pc.touching && pc.depth < 0.0 && sep != nullptr) {
             *sep = pc.normal; // the common plane of the largest gap
@@ -622,7 +641,7 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
 }
 
 ElementContact element_contact(const Element& a, const Element& b, NarrowPhase method,
-                               const Vec3* warm, Vec3* separating) {
+                               const Vec3* warm, Vec3* separating, bool touched_last) {
     // Bounding spheres first: most candidate pairs are apart.
     const double rsum = a.radius + b.radius;
     if ((a.centre - b.centre).squaredNorm() >= rsum * rsum) {
@@ -634,7 +653,7 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
     const bool poly_a = a.kind == Element::Kind::polyhedron;
     const bool poly_b = b.kind == Element::Kind::polyhedron;
     if (poly_a && poly_b) {
-        return polyhedron_pair(a, b, method, separating);
+        return polyhedron_pair(a, b, method, separating, touched_last);
     }
     if (poly_b && a.kind == Element::Kind::sphere) {
         return sphere_polyhedron(a, b);

@@ -116,8 +116,13 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
 /// (geometry/separating_axis.hpp) before its narrow phase. Either way the answer is the one
 /// without it: a direction with a gap proves the pair apart. nullptr: no cache, no search (a pair
 /// that touched at the last step).
+///
+/// `touched_last`: the pair touched at the last step. A polyhedron pair then skips the
+/// line-of-centres test (two support searches that almost never prove such a pair apart) and runs
+/// its exact query at once; other pairs ignore it.
 [[nodiscard]] ElementContact element_contact(const Element& a, const Element& b, NarrowPhase method,
-                                             const Vec3* warm, Vec3* separating = nullptr);
+                                             const Vec3* warm, Vec3* separating = nullptr,
+                                             bool touched_last = false);
 
 /// Effective radius (m) of element a against a flat wall of unit normal n (from the wall to a,
 /// world frame): a sphere's radius, a polyhedron's equivalent radius, a superquadric's R* at its

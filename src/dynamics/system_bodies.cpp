@@ -646,10 +646,19 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                             }
                             continue;
                         }
-                        // Warm start: the last normal, else the line of centres.
-                        const Vec3 guess = old != nullptr ? old->normal : Vec3(A.centre - B.centre);
-                        const Vec3 warm =
-                            guess.squaredNorm() > 0.0 ? Vec3(guess.normalized()) : Vec3::UnitZ();
+                        // Warm start: the last normal, else the line of centres. Only pairs
+                        // with a superquadric read it (a square root and a division saved for
+                        // every polyhedron query).
+                        const bool wants_warm = A.kind == Element::Kind::superquadric ||
+                                                B.kind == Element::Kind::superquadric;
+                        Vec3 warm = Vec3::UnitZ();
+                        if (wants_warm) {
+                            const Vec3 guess =
+                                old != nullptr ? old->normal : Vec3(A.centre - B.centre);
+                            if (guess.squaredNorm() > 0.0) {
+                                warm = guess.normalized();
+                            }
+                        }
                         Vec3* sep = nullptr;
                         if (single && separation_cache_) {
                             sep = &sep_dirs_[k];
@@ -659,7 +668,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                             }
                         }
                         const ElementContact ec =
-                            element_contact(A, B, spec_.narrow_phase, &warm, sep);
+                            element_contact(A, B, spec_.narrow_phase, wants_warm ? &warm : nullptr,
+                                            sep, old != nullptr);
                         ++np_.calls;
                         separation_skips_ += ec.proved_apart ? 1 : 0;
                         np_.fallbacks += ec.fell_back ? 1 : 0;

@@ -171,22 +171,6 @@ void relative_arcs(const PolyhedronFeatures& fb, Relative& r) {
     }
 }
 
-double min_dot(const std::vector<Vec3>& pts, const Vec3& n) {
-    double m = std::numeric_limits<double>::infinity();
-    for (const Vec3& p : pts) {
-        m = std::min(m, n.dot(p));
-    }
-    return m;
-}
-
-double max_dot(const std::vector<Vec3>& pts, const Vec3& n) {
-    double m = -std::numeric_limits<double>::infinity();
-    for (const Vec3& p : pts) {
-        m = std::max(m, n.dot(p));
-    }
-    return m;
-}
-
 /// Gauss-map test of Gregorius (2013): do the arcs (a, b) of A's edge and (c, d) of B's negated
 /// edge cross, i.e. does the edge pair span a face of the Minkowski difference?
 bool is_minkowski_face(const Vec3& a, const Vec3& b, const Vec3& bxa, const Vec3& c, const Vec3& d,
@@ -280,12 +264,31 @@ void add_unique(std::vector<Vec3>& pts, const Vec3& p, double tol2) {
 /// Depth along the normal m (unit, from B to A, A's body frame) as the patch takes it: the
 /// distance between the deepest vertices of A and B along m (m).
 struct PlaneDepth {
-    double d_a; // min over A's vertices of m . x (m)
-    double d_b; // max over B's vertices of m . x (m)
+    double d_a;            // min over A's vertices of m . x (m)
+    double d_b;            // max over B's vertices of m . x (m)
+    std::size_t deepest_a; // a vertex of A where d_a is reached (the first)
+    std::size_t deepest_b; // a vertex of B where d_b is reached (the first)
 };
 
 PlaneDepth plane_depth(const PolyhedronFeatures& fa, const Relative& r, const Vec3& m) {
-    return {min_dot(fa.vertices, m), max_dot(r.vb, m)};
+    // m . x over each body's vertices: the extremes and where they are first reached.
+    PlaneDepth p{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                 0, 0};
+    for (std::size_t i = 0; i < fa.vertices.size(); ++i) {
+        const double h = m.dot(fa.vertices[i]);
+        if (h < p.d_a) {
+            p.d_a = h;
+            p.deepest_a = i;
+        }
+    }
+    for (std::size_t j = 0; j < r.vb.size(); ++j) {
+        const double h = m.dot(r.vb[j]);
+        if (h > p.d_b) {
+            p.d_b = h;
+            p.deepest_b = j;
+        }
+    }
+    return p;
 }
 
 /// Points and patch for the normal m (unit, from B to A), all in A's body frame; the result's
@@ -296,7 +299,9 @@ PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b,
     const PolyhedronFeatures& fb = *b.shape;
     const double scale = fa.radius + fb.radius;
     PolyhedronContact c;
-    const auto [d_a, d_b] = plane_depth(fa, r, m);
+    const PlaneDepth pd = plane_depth(fa, r, m);
+    const double d_a = pd.d_a;
+    const double d_b = pd.d_b;
     c.depth = d_b - d_a;
     c.touching = c.depth > 0.0;
     const double s = 0.5 * (d_a + d_b);
@@ -420,16 +425,31 @@ void edge_stage(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, cons
     }
 }
 
-/// Does one of nv vertices lie strictly inside the other body (all its nf distances beyond the
-/// other body's face planes negative; `dist` vertex-major as in Relative)?
-bool vertex_inside(const std::vector<double>& dist, std::size_t nv, std::size_t nf) {
-    for (std::size_t i = 0; i < nv; ++i) {
-        const double* d = dist.data() + i * nf;
-        if (*std::max_element(d, d + nf) < 0.0) {
-            return true;
+/// Signed distances (m) of the vertices `v` beyond the face planes (n, o) of the other body,
+/// vertex-major: dist[i * nf + k] = n_k . v_i - o_k; sep[k] = the smallest over the vertices (the
+/// separation along face k). Returns whether a vertex lies strictly inside the other body (all its
+/// distances negative). Vertex by vertex, so the faces' running minima are independent of each
+/// other (no chain of dependent minima per face) and the table is written in order.
+bool face_distances(const std::vector<Vec3>& n, const std::vector<double>& o,
+                    const std::vector<Vec3>& v, std::vector<double>& dist,
+                    std::vector<double>& sep) {
+    const std::size_t nf = n.size();
+    dist.resize(nf * v.size());
+    sep.assign(nf, std::numeric_limits<double>::infinity());
+    bool inside = false;
+    for (std::size_t i = 0; i < v.size(); ++i) {
+        const Vec3& x = v[i];
+        double* row = dist.data() + i * nf;
+        double top = -std::numeric_limits<double>::infinity();
+        for (std::size_t k = 0; k < nf; ++k) {
+            const double d = n[k].dot(x) - o[k];
+            row[k] = d;
+            sep[k] = std::min(sep[k], d);
+            top = std::max(top, d);
         }
+        inside = inside || top < 0.0;
     }
-    return false;
+    return inside;
 }
 
 /// Does a kept edge of one body (vertices `v`, A's frame) cross the other body (face planes n,
@@ -486,42 +506,30 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
     // normal from B to A.
     double best = -std::numeric_limits<double>::infinity();
     Vec3 best_m = Vec3::UnitX();
-    const std::size_t nva = fa.vertices.size();
-    const std::size_t nvb = r.vb.size();
     const std::size_t nfa = fa.face_normals.size();
     const std::size_t nfb = fb.face_normals.size();
-    r.dist_b.resize(nfa * nvb);
-    for (std::size_t k = 0; k < fa.face_normals.size(); ++k) {
-        const Vec3& n = fa.face_normals[k];
-        double sep = std::numeric_limits<double>::infinity();
-        for (std::size_t j = 0; j < nvb; ++j) {
-            const double dj = n.dot(r.vb[j]) - fa.face_offsets[k];
-            r.dist_b[j * nfa + k] = dj;
-            sep = std::min(sep, dj);
-        }
+    thread_local std::vector<double> sep;
+    const bool b_in_a = face_distances(fa.face_normals, fa.face_offsets, r.vb, r.dist_b, sep);
+    for (std::size_t k = 0; k < nfa; ++k) {
         ++c.iterations;
-        if (sep > best) {
-            best = sep;
-            best_m = -n;
+        if (sep[k] > best) {
+            best = sep[k];
+            best_m = -fa.face_normals[k];
             c.feature = CommonPlaneFeature::kFaceOfA;
         }
     }
+    bool a_in_b = false;
     if (best <= 0.0) {
         relative_faces(fb, r);
-    }
-    r.dist_a.resize(nfb * nva);
-    for (std::size_t k = 0; k < r.nb.size() && best <= 0.0; ++k) {
-        double sep = std::numeric_limits<double>::infinity();
-        for (std::size_t i = 0; i < nva; ++i) {
-            const double di = r.nb[k].dot(fa.vertices[i]) - r.ob[k];
-            r.dist_a[i * nfb + k] = di;
-            sep = std::min(sep, di);
-        }
-        ++c.iterations;
-        if (sep > best) {
-            best = sep;
-            best_m = r.nb[k];
-            c.feature = CommonPlaneFeature::kFaceOfB;
+        a_in_b = face_distances(r.nb, r.ob, fa.vertices, r.dist_a, sep);
+        // The faces in order up to the first that separates (a gap ends the search).
+        for (std::size_t k = 0; k < nfb && best <= 0.0; ++k) {
+            ++c.iterations;
+            if (sep[k] > best) {
+                best = sep[k];
+                best_m = r.nb[k];
+                c.feature = CommonPlaneFeature::kFaceOfB;
+            }
         }
     }
     if (best <= 0.0) {
@@ -548,8 +556,7 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
         // before the prune, exact in both cases).
         const bool pruned_some =
             r.edges_a.size() < fa.edges.size() || r.edges_b.size() < fb.edges.size();
-        if (best <= 0.0 && pruned_some && !vertex_inside(r.dist_b, nvb, nfa) &&
-            !vertex_inside(r.dist_a, nva, nfb) &&
+        if (best <= 0.0 && pruned_some && !b_in_a && !a_in_b &&
             !edge_crosses(fa.edges, r.edges_a, fa.vertices, r.nb, r.ob) &&
             !edge_crosses(fb.edges, r.edges_b, r.vb, fa.face_normals, fa.face_offsets)) {
             Vec3 m;
@@ -581,11 +588,13 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
     if (need_patch != nullptr) {
         // The depth as the patch would give it (its own vertex loops), so the numbers do not
         // depend on the decision.
-        const auto [d_a, d_b] = plane_depth(fa, r, best_m);
-        c.depth = d_b - d_a;
+        const PlaneDepth pd = plane_depth(fa, r, best_m);
+        c.depth = pd.d_b - pd.d_a;
         c.touching = c.depth > 0.0;
         c.normal = a.q * best_m;
-        c.point = 0.5 * (a.support(-c.normal) + b.support(c.normal));
+        // The deepest vertices of the loops above (A's frame; B's already turned into it), not
+        // two more support searches.
+        c.point = a.x + a.q * (0.5 * (fa.vertices[pd.deepest_a] + r.vb[pd.deepest_b]));
         if (!(*need_patch)(c)) {
             return c;
         }
@@ -597,6 +606,20 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
 }
 
 } // namespace
+
+double polyhedron_overlap_along(const PosedPolyhedron& a, const PosedPolyhedron& b, const Vec3& m) {
+    const Vec3 mb = b.q.conjugate() * m;
+    const Vec3 ma = a.q.conjugate() * m;
+    double hb = -std::numeric_limits<double>::infinity();
+    for (const Vec3& v : b.shape->vertices) {
+        hb = std::max(hb, mb.dot(v));
+    }
+    double ha = -std::numeric_limits<double>::infinity();
+    for (const Vec3& v : a.shape->vertices) {
+        ha = std::max(ha, -ma.dot(v));
+    }
+    return m.dot(b.x - a.x) + hb + ha;
+}
 
 PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b,
                                      bool with_patch) {

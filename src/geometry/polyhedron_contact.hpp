@@ -70,6 +70,14 @@ struct PosedPolyhedron {
     [[nodiscard]] double length_scale() const { return shape->radius; }
 };
 
+/// Overlap (m) of posed polyhedra a and b along the unit world direction m (from b towards a),
+/// h_b(m) + h_a(-m) with h the support function: the value of overlap_along
+/// (separating_axis.hpp) to round-off, from heights alone: m . (x_b - x_a) plus the largest
+/// heights of b's vertices along m and of a's along -m in the body frames (one rotation of m per
+/// body, no support point turned back to the world). Negative: m separates them.
+[[nodiscard]] double polyhedron_overlap_along(const PosedPolyhedron& a, const PosedPolyhedron& b,
+                                              const Vec3& m);
+
 /// Which candidate plane of the fast common plane won.
 enum class CommonPlaneFeature {
     kNone,     ///< no candidate (bounding spheres apart)

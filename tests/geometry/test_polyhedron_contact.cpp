@@ -496,6 +496,30 @@ TEST(PolyhedronContact, PatchOnDemandGivesTheSameNumbers) {
     }
 }
 
+TEST(SeparatingAxis, PolyhedronOverlapFromHeightsAgreesWithTheSupportForm) {
+    // polyhedron_overlap_along (heights in the body frames) against overlap_along (support points
+    // turned to the world) over near-contact poses and random directions: the same number to
+    // round-off, far inside the separation margin, so a cached direction proves the same pairs.
+    /// Round-off of two rotations and a few dot products of O(size) numbers, relative to the size.
+    constexpr double kRoundOff = 1e-14;
+    static_assert(kRoundOff < 1e-3 * kProofMargin, "the margin must dwarf the difference");
+    std::mt19937_64 rng(41);
+    std::normal_distribution<double> nd;
+    for (const std::string name : {"cube", "icosahedron", "cylinder_16"}) {
+        SCOPED_TRACE(name);
+        const g::PolyhedronFeatures f = load(name);
+        const double scale = 2.0 * f.radius;
+        double worst = 0.0;
+        for (int n = 0; n < 2000; ++n) {
+            const auto [a, b] = near_pair(g::PosedPolyhedron{&f}, g::PosedPolyhedron{&f}, rng);
+            const Vec3 m = Vec3(nd(rng), nd(rng), nd(rng)).normalized();
+            worst = std::max(
+                worst, std::abs(g::polyhedron_overlap_along(a, b, m) - g::overlap_along(a, b, m)));
+        }
+        EXPECT_LE(worst, kRoundOff * scale);
+    }
+}
+
 TEST(SeparatingAxis, PortalSearchProvesOnlyTrueGapsAndFindsClearOnes) {
     // find_separating_direction answers only with a proof: each direction it returns leaves a gap
     // larger than the margin, and the exact common plane finds the pair apart too. A pair that the
