@@ -727,7 +727,7 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
                 cc.normal = f_epa < f_newton ? epa.normal : cc.normal;
             }
             cc.touching = cc.converged && cc.depth > 0.0;
-            cc.point = 0.5 * (pa.support(-cc.normal) + pb.support(cc.normal));
+            cc.set_deepest(pa.support(-cc.normal), pb.support(cc.normal));
         }
     } else {
         cc = geometry::ccd_contact(pa, pb, false);
