@@ -102,6 +102,10 @@ class SupportMinimiser {
 
     /// The same with f already evaluated at n0 (e0 = eval(n0)).
     NewtonEnd newton(Vec3 n, Eval e, int& iterations) const {
+        // dp/dn as a world-frame matrix acting on tangent vectors: from finite differences, then
+        // (secant_updates) carried to the next iterate by Broyden's update after a full step.
+        Mat3 jac = Mat3::Zero();
+        bool have_jac = false;
         for (int it = 0; it < kMaxNewton; ++it) {
             ++iterations;
             const Vec3 g = e.p - e.f * n; // tangential (Riemannian) gradient
@@ -115,15 +119,21 @@ class SupportMinimiser {
             // (two evaluations) by default, central ones (four) on request.
             std::array<Vec3, 2> dp;
             const std::array<Vec3, 2> basis{e1, e2};
-            const double h_fd = settings_.fd_step;
-            for (std::size_t j = 0; j < 2; ++j) {
-                const Vec3 pp = eval((n + h_fd * basis[j]).normalized()).p;
-                if (settings_.central_differences) {
-                    const Vec3 pm = eval((n - h_fd * basis[j]).normalized()).p;
-                    dp[j] = (pp - pm) / (2.0 * h_fd);
-                } else {
-                    dp[j] = (pp - e.p) / h_fd;
+            if (have_jac) {
+                dp[0] = jac * e1;
+                dp[1] = jac * e2;
+            } else {
+                const double h_fd = settings_.fd_step;
+                for (std::size_t j = 0; j < 2; ++j) {
+                    const Vec3 pp = eval((n + h_fd * basis[j]).normalized()).p;
+                    if (settings_.central_differences) {
+                        const Vec3 pm = eval((n - h_fd * basis[j]).normalized()).p;
+                        dp[j] = (pp - pm) / (2.0 * h_fd);
+                    } else {
+                        dp[j] = (pp - e.p) / h_fd;
+                    }
                 }
+                jac = dp[0] * e1.transpose() + dp[1] * e2.transpose();
             }
             Eigen::Matrix2d h;
             h << e1.dot(dp[0]), e1.dot(dp[1]), e2.dot(dp[0]), e2.dot(dp[1]);
@@ -177,6 +187,19 @@ class SupportMinimiser {
                 // No decrease possible: f is flat to round-off here. Converged when the gradient
                 // is small (the depth error is then about |g|^2 / curvature, negligible).
                 return {n, g.norm() < 1e-7 * length_, e};
+            }
+            // A full step means the model held: update dp/dn along it (Broyden: the least change
+            // with jac s = y) instead of new differences; after a shortened step, differences.
+            have_jac = settings_.secant_updates && t == 1.0;
+            if (have_jac) {
+                const Vec3 s = trial - n;
+                const Vec3 y = et.p - e.p;
+                const double ss = s.squaredNorm();
+                if (ss > 0.0) {
+                    jac += (y - jac * s) * s.transpose() / ss;
+                } else {
+                    have_jac = false;
+                }
             }
             n = trial;
             e = et;

@@ -122,6 +122,9 @@ struct NewtonSettings {
     /// Where the decrease a step promises is below the round-off of f, accept a step that keeps
     /// f within its round-off and shrinks the gradient (instead of 20 halvings and a stop).
     bool roundoff_steps = true;
+    /// After a full Newton step, update dp/dn by Broyden's secant formula (no evaluations)
+    /// instead of new differences; after a shortened step, differences again.
+    bool secant_updates = true;
 };
 
 /// Newton's method on the sphere of directions (convex_contact.cpp). Without `warm_normal` it
