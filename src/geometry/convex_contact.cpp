@@ -88,8 +88,11 @@ class SupportMinimiser {
     }
 
     [[nodiscard]] Eval eval(const Vec3& n) const {
-        const Vec3 sa = a_.support(n);
-        const Vec3 sb = b_.support(-n);
+        return eval_from(n, a_.support(n), b_.support(-n));
+    }
+
+    /// The evaluation at n from the supports s_A(n) and s_B(-n).
+    [[nodiscard]] static Eval eval_from(const Vec3& n, const Vec3& sa, const Vec3& sb) {
         const Vec3 p = sa - sb;
         return {n.dot(p), p, sa, sb};
     }
@@ -115,8 +118,8 @@ class SupportMinimiser {
             const Vec3 e1 = n.unitOrthogonal();
             const Vec3 e2 = n.cross(e1);
             // Riemannian Hessian: P (dp/dn) P - f I on the tangent plane; dp/dn (the summed
-            // curvature-radius tensors of A and B) by finite differences: forward ones from e.p
-            // (two evaluations) by default, central ones (four) on request.
+            // curvature-radius tensors of A and B) by finite differences: central ones (four
+            // evaluations) by default, forward ones from e.p (two) on request.
             std::array<Vec3, 2> dp;
             const std::array<Vec3, 2> basis{e1, e2};
             if (have_jac) {
@@ -219,11 +222,17 @@ class SupportMinimiser {
 } // namespace
 
 ConvexContact support_newton_contact(const PosedSuperquadric& a, const PosedSuperquadric& b,
-                                     const Vec3* warm_normal, const NewtonSettings& settings) {
+                                     const Vec3* warm_normal, const NewtonSettings& settings,
+                                     const std::array<Vec3, 2>* warm_supports) {
     const SupportMinimiser m(a, b, settings);
     if (warm_normal != nullptr) {
         int iterations = 0;
-        const NewtonEnd end = m.newton(-*warm_normal, iterations);
+        const Vec3 n0 = -*warm_normal;
+        const NewtonEnd end =
+            warm_supports != nullptr
+                ? m.newton(n0, m.eval_from(n0, (*warm_supports)[0], (*warm_supports)[1]),
+                           iterations)
+                : m.newton(n0, iterations);
         if (end.ok) {
             ConvexContact c;
             c.depth = end.e.f;

@@ -197,14 +197,15 @@ TEST(ConvexContact, WarmStartedNewtonFindsTheColdStartResult) {
     EXPECT_EQ(fell_back, 0);
 }
 
-// The default settings of Newton's method (forward differences at 1e-8 rad, steps judged by the
-// gradient where f is flat to round-off) against those of 2026-11-24 (central differences at 1e-6
-// rad, Armijo only) over random poses of the six shapes of EpaAndNewtonAgreeOverRandomPoses, cold
-// and warm (previous normal turned by 0.02 rad) starts. Both stop on the same test, a tangential
-// gradient |g| below kGradTol = 1e-9 L, so the two minima agree to what that test pins: the depth
-// to |g|^2 / lambda and the normal to |g| / lambda (lambda the smallest eigenvalue of the Hessian
-// of f, the summed curvature radius: at least ~1e-2 L for these shapes), i.e. 1e-16 L and
-// 2e-7 rad, plus the round-off of f (1e-16 of the coordinates). Both have to converge.
+// The default settings of Newton's method (differences at 1e-8 rad, steps judged by the gradient
+// where f is flat to round-off, Broyden updates of the Hessian) against those of 2026-11-24
+// (differences at 1e-6 rad, Armijo only, new differences at every iteration) over random poses of
+// the six shapes of EpaAndNewtonAgreeOverRandomPoses, cold and warm (previous normal turned by 0.02
+// rad) starts. Both stop on the same test, a tangential gradient |g| below kGradTol = 1e-9 L, so
+// the two minima agree to what that test pins: the depth to |g|^2 / lambda and the normal to |g| /
+// lambda (lambda the smallest eigenvalue of the Hessian of f, the summed curvature radius: at least
+// ~1e-2 L for these shapes), i.e. 1e-16 L and 2e-7 rad, plus the round-off of f (1e-16 of the
+// coordinates). Both have to converge.
 TEST(ConvexContact, DefaultNewtonSettingsAgreeWithTheReferenceSettings) {
     const std::vector<g::Superquadric> shapes = {
         make(Vec3(1.0, 2.0, 3.0), 1.0, 1.0), make(Vec3(1.0, 1.0, 1.0), 0.5, 0.5),
