@@ -61,6 +61,10 @@ constexpr int kMaxNewton = 100;   // Newton iterations per start
 constexpr int kStarts = 4;        // Newton runs from the best sampled directions
 constexpr double kGradTol = 1e-9; // |tangential gradient| / L; the support round-off is ~1e-10
 constexpr double kMaxTurn = 0.5;  // largest Newton step (rad)
+// Below this exponent the Hessian comes from differences even with analytic_hessian: the
+// curvature of a blocky body changes within far less than a Newton step near its flat faces, and
+// the point value made e = 0.3 searches slower (docs/performance.md, session 11).
+constexpr double kBlockyHessian = 0.5;
 constexpr double kFNoise = 1e-14; // round-off of f relative to the summed |coordinates| of s_A, s_B
 
 /// f(n) = h_A(n) + h_B(-n), its Euclidean gradient p = s_A(n) - s_B(-n) (Danskin) and the two
@@ -85,6 +89,7 @@ class SupportMinimiser {
                      const NewtonSettings& settings)
         : a_(a), b_(b), settings_(settings) {
         length_ = a.length_scale() + b.length_scale();
+        blocky_ = std::min({a.shape->e1, a.shape->e2, b.shape->e1, b.shape->e2}) < kBlockyHessian;
     }
 
     [[nodiscard]] Eval eval(const Vec3& n) const {
@@ -122,10 +127,16 @@ class SupportMinimiser {
             // evaluations) by default, forward ones from e.p (two) on request.
             std::array<Vec3, 2> dp;
             const std::array<Vec3, 2> basis{e1, e2};
-            if (have_jac) {
+            if (!have_jac && settings_.analytic_hessian && !blocky_) {
+                have_jac = radius_tensors(e, e1, e2, dp);
+                if (have_jac) {
+                    jac = dp[0] * e1.transpose() + dp[1] * e2.transpose();
+                }
+            } else if (have_jac) {
                 dp[0] = jac * e1;
                 dp[1] = jac * e2;
-            } else {
+            }
+            if (!have_jac) {
                 const double h_fd = settings_.fd_step;
                 for (std::size_t j = 0; j < 2; ++j) {
                     const Vec3 pp = eval((n + h_fd * basis[j]).normalized()).p;
@@ -210,6 +221,39 @@ class SupportMinimiser {
         return {n, false, e};
     }
 
+    /// dp/dn e1 and dp/dn e2 from the curvature: dp/dn on the tangent plane is the sum of the
+    /// two bodies' curvature-radius tensors, the inverses of their curvature tensors (the support
+    /// map inverts the Gauss map) at s_A(n) and s_B(-n). False (use differences) where a tensor
+    /// is not finite or not safely invertible (flat points, tips).
+    bool radius_tensors(const Eval& e, const Vec3& e1, const Vec3& e2,
+                        std::array<Vec3, 2>& dp) const {
+        Eigen::Matrix2d sum = Eigen::Matrix2d::Zero();
+        for (const auto& [body, point] : {std::pair{&a_, &e.sa}, std::pair{&b_, &e.sb}}) {
+            const Vec3 local = body->q.conjugate() * (*point - body->x);
+            const Mat3 k_body = body->shape->curvature_tensor(local);
+            const Vec3 t1 = body->q.conjugate() * e1;
+            const Vec3 t2 = body->q.conjugate() * e2;
+            const double k11 = t1.dot(k_body * t1);
+            const double k22 = t2.dot(k_body * t2);
+            const double k12 = 0.5 * (t1.dot(k_body * t2) + t2.dot(k_body * t1));
+            const double det = k11 * k22 - k12 * k12;
+            const double scale = body->length_scale();
+            // Curvature radii above 1e6 of the body's size (nearly flat) or a non-finite tensor:
+            // leave it to the differences.
+            if (!std::isfinite(det) || !(k11 > 0.0) || !(k22 > 0.0) ||
+                !(det > 1e-12 / (scale * scale) * (k11 + k22) * (k11 + k22))) {
+                return false;
+            }
+            sum(0, 0) += k22 / det;
+            sum(1, 1) += k11 / det;
+            sum(0, 1) -= k12 / det;
+        }
+        sum(1, 0) = sum(0, 1);
+        dp[0] = sum(0, 0) * e1 + sum(1, 0) * e2;
+        dp[1] = sum(0, 1) * e1 + sum(1, 1) * e2;
+        return true;
+    }
+
     [[nodiscard]] double length() const { return length_; }
 
   private:
@@ -217,6 +261,7 @@ class SupportMinimiser {
     const PosedSuperquadric& b_;
     const NewtonSettings& settings_;
     double length_ = 0.0;
+    bool blocky_ = false; ///< an exponent below kBlockyHessian: differences, not curvature
 };
 
 } // namespace

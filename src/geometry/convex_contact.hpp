@@ -130,6 +130,10 @@ struct NewtonSettings {
     /// After a full Newton step, update dp/dn by Broyden's secant formula (no evaluations)
     /// instead of new differences; after a shortened step, differences again.
     bool secant_updates = true;
+    /// The first Hessian of a run from the two bodies' curvature tensors at the current supports
+    /// (their inverses, the curvature radii, summed) instead of differences; differences where a
+    /// point is nearly flat or a tip, and for pairs with an exponent below 0.5 (blocky).
+    bool analytic_hessian = true;
 };
 
 /// Newton's method on the sphere of directions (convex_contact.cpp). Without `warm_normal` it

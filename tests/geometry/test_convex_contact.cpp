@@ -217,6 +217,7 @@ TEST(ConvexContact, DefaultNewtonSettingsAgreeWithTheReferenceSettings) {
     reference.central_differences = true;
     reference.roundoff_steps = false;
     reference.secant_updates = false;
+    reference.analytic_hessian = false;
     std::mt19937_64 rng(611);
     std::normal_distribution<double> nd;
     std::uniform_real_distribution<double> ud(0.0, 1.0);
