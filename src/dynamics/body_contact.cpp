@@ -698,11 +698,16 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
         }
         return {};
     }
-    if (warm != nullptr && depth_along(pa, pb, *warm) < 0.0) {
-        if (separating != nullptr) {
-            *separating = *warm;
+    // Along the warm normal: the same two supports are Newton's first evaluation, handed on.
+    std::array<Vec3, 2> warm_supports;
+    if (warm != nullptr) {
+        warm_supports = {pa.support(-*warm), pb.support(*warm)};
+        if (warm->dot(warm_supports[1]) - warm->dot(warm_supports[0]) < 0.0) {
+            if (separating != nullptr) {
+                *separating = *warm;
+            }
+            return {};
         }
-        return {};
     }
     if (separating != nullptr) {
         Vec3 m;
@@ -725,7 +730,8 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
                 return out;
             }
         }
-        cc = geometry::support_newton_contact(pa, pb, warm);
+        cc = geometry::support_newton_contact(pa, pb, warm, {},
+                                              warm != nullptr ? &warm_supports : nullptr);
         if (!cc.converged) {
             // Newton stalled (near flat faces the support map is ill-conditioned and its gradient
             // test may not be met). Its last direction and GJK/EPA's normal both give an exact
@@ -746,7 +752,7 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
                 cc.normal = f_epa < f_newton ? epa.normal : cc.normal;
             }
             cc.touching = cc.converged && cc.depth > 0.0;
-            cc.point = 0.5 * (pa.support(-cc.normal) + pb.support(cc.normal));
+            cc.set_deepest(pa.support(-cc.normal), pb.support(cc.normal));
         }
     } else {
         cc = geometry::ccd_contact(pa, pb, false);

@@ -21,7 +21,7 @@ ConvexContact convex_contact(const PosedSuperquadric& a, const PosedSuperquadric
     case ConvexMethod::kCcdMpr:
         return ccd_contact(a, b, true);
     case ConvexMethod::kSupportNewton:
-        return support_newton_contact(a, b);
+        return support_newton_contact(a, b, nullptr);
     }
     return {};
 }
@@ -31,8 +31,9 @@ ContactCurvature contact_curvature(const PosedSuperquadric& a, const PosedSuperq
     // Deepest points: A's support against the normal, B's along it. Each body's curvature tensor
     // is rotated to the world frame; near the contact the gap between the surfaces is
     // 1/2 x^T (K_A + K_B) x in the common tangent plane (Johnson 1985, Sec. 4.1).
-    const Vec3 pa = a.q.conjugate() * (a.support(-c.normal) - a.x);
-    const Vec3 pb = b.q.conjugate() * (b.support(c.normal) - b.x);
+    const Vec3 pa =
+        a.q.conjugate() * ((c.deepest_known ? c.deepest_a : a.support(-c.normal)) - a.x);
+    const Vec3 pb = b.q.conjugate() * ((c.deepest_known ? c.deepest_b : b.support(c.normal)) - b.x);
     const Mat3 ra = a.q.toRotationMatrix();
     const Mat3 rb = b.q.toRotationMatrix();
     const Mat3 k = ra * a.shape->curvature_tensor(pa) * ra.transpose() +
@@ -59,45 +60,94 @@ namespace {
 constexpr int kMaxNewton = 100;   // Newton iterations per start
 constexpr int kStarts = 4;        // Newton runs from the best sampled directions
 constexpr double kGradTol = 1e-9; // |tangential gradient| / L; the support round-off is ~1e-10
-constexpr double kFdStep = 1e-6;  // finite-difference step (rad) of the Hessian
 constexpr double kMaxTurn = 0.5;  // largest Newton step (rad)
+// Below this exponent the Hessian comes from differences even with analytic_hessian: the
+// curvature of a blocky body changes within far less than a Newton step near its flat faces, and
+// the point value made e = 0.3 searches slower (docs/performance.md, session 11).
+constexpr double kBlockyHessian = 0.5;
+constexpr double kFNoise = 1e-14; // round-off of f relative to the summed |coordinates| of s_A, s_B
 
-/// f(n) = h_A(n) + h_B(-n) and its Euclidean gradient p = s_A(n) - s_B(-n) (Danskin).
+/// f(n) = h_A(n) + h_B(-n), its Euclidean gradient p = s_A(n) - s_B(-n) (Danskin) and the two
+/// support points (m, world frame), kept so that the contact point and the curvature reuse them.
 struct Eval {
     double f;
     Vec3 p;
+    Vec3 sa; ///< s_A(n)
+    Vec3 sb; ///< s_B(-n)
+};
+
+/// End of a Newton run: the final direction, whether it converged, and f there.
+struct NewtonEnd {
+    Vec3 n;
+    bool ok;
+    Eval e;
 };
 
 class SupportMinimiser {
   public:
-    SupportMinimiser(const PosedSuperquadric& a, const PosedSuperquadric& b) : a_(a), b_(b) {
+    SupportMinimiser(const PosedSuperquadric& a, const PosedSuperquadric& b,
+                     const NewtonSettings& settings)
+        : a_(a), b_(b), settings_(settings) {
         length_ = a.length_scale() + b.length_scale();
+        blocky_ = std::min({a.shape->e1, a.shape->e2, b.shape->e1, b.shape->e2}) < kBlockyHessian;
     }
 
     [[nodiscard]] Eval eval(const Vec3& n) const {
-        const Vec3 p = a_.support(n) - b_.support(-n);
-        return {n.dot(p), p};
+        return eval_from(n, a_.support(n), b_.support(-n));
     }
 
-    /// Newton on the sphere from n0; returns the final direction and whether it converged.
-    std::pair<Vec3, bool> newton(Vec3 n, int& iterations) const {
+    /// The evaluation at n from the supports s_A(n) and s_B(-n).
+    [[nodiscard]] static Eval eval_from(const Vec3& n, const Vec3& sa, const Vec3& sb) {
+        const Vec3 p = sa - sb;
+        return {n.dot(p), p, sa, sb};
+    }
+
+    /// Newton on the sphere from n0; returns the final direction, whether it converged and f
+    /// there. The accepted trial's evaluation serves the next iteration (it is f at the new n).
+    NewtonEnd newton(const Vec3& n0, int& iterations) const {
+        return newton(n0, eval(n0), iterations);
+    }
+
+    /// The same with f already evaluated at n0 (e0 = eval(n0)).
+    NewtonEnd newton(Vec3 n, Eval e, int& iterations) const {
+        // dp/dn as a world-frame matrix acting on tangent vectors: from finite differences, then
+        // (secant_updates) carried to the next iterate by Broyden's update after a full step.
+        Mat3 jac = Mat3::Zero();
+        bool have_jac = false;
         for (int it = 0; it < kMaxNewton; ++it) {
             ++iterations;
-            const Eval e = eval(n);
             const Vec3 g = e.p - e.f * n; // tangential (Riemannian) gradient
             if (g.norm() < kGradTol * length_) {
-                return {n, true};
+                return {n, true, e};
             }
             const Vec3 e1 = n.unitOrthogonal();
             const Vec3 e2 = n.cross(e1);
             // Riemannian Hessian: P (dp/dn) P - f I on the tangent plane; dp/dn (the summed
-            // curvature-radius tensors of A and B) by central differences.
+            // curvature-radius tensors of A and B) by finite differences: central ones (four
+            // evaluations) by default, forward ones from e.p (two) on request.
             std::array<Vec3, 2> dp;
             const std::array<Vec3, 2> basis{e1, e2};
-            for (std::size_t j = 0; j < 2; ++j) {
-                const Vec3 pp = eval((n + kFdStep * basis[j]).normalized()).p;
-                const Vec3 pm = eval((n - kFdStep * basis[j]).normalized()).p;
-                dp[j] = (pp - pm) / (2.0 * kFdStep);
+            if (!have_jac && settings_.analytic_hessian && !blocky_) {
+                have_jac = radius_tensors(e, e1, e2, dp);
+                if (have_jac) {
+                    jac = dp[0] * e1.transpose() + dp[1] * e2.transpose();
+                }
+            } else if (have_jac) {
+                dp[0] = jac * e1;
+                dp[1] = jac * e2;
+            }
+            if (!have_jac) {
+                const double h_fd = settings_.fd_step;
+                for (std::size_t j = 0; j < 2; ++j) {
+                    const Vec3 pp = eval((n + h_fd * basis[j]).normalized()).p;
+                    if (settings_.central_differences) {
+                        const Vec3 pm = eval((n - h_fd * basis[j]).normalized()).p;
+                        dp[j] = (pp - pm) / (2.0 * h_fd);
+                    } else {
+                        dp[j] = (pp - e.p) / h_fd;
+                    }
+                }
+                jac = dp[0] * e1.transpose() + dp[1] * e2.transpose();
             }
             Eigen::Matrix2d h;
             h << e1.dot(dp[0]), e1.dot(dp[1]), e2.dot(dp[0]), e2.dot(dp[1]);
@@ -121,14 +171,27 @@ class SupportMinimiser {
             if (step.norm() > kMaxTurn) {
                 step *= kMaxTurn / step.norm();
             }
-            // Backtracking until f decreases (Armijo with a small constant).
+            // Backtracking until f decreases (Armijo with a small constant). Near the minimum the
+            // decrease a step promises, -t slope, falls below the round-off of f (a difference of
+            // world coordinates): f cannot judge the step there, so a step that leaves f within
+            // its round-off is taken when it shrinks the gradient, the quantity of the convergence
+            // test (otherwise the search halved t 20 times and stopped on the looser test below).
             const double slope = -rhs.dot(step);
+            const double f_noise = kFNoise * (e.sa.cwiseAbs().sum() + e.sb.cwiseAbs().sum());
+            const double g_norm = g.norm();
             double t = 1.0;
             Vec3 trial = n;
             bool moved = false;
+            Eval et{};
             for (int ls = 0; ls < 20; ++ls) { // t >= 2e-6: shorter steps are round-off
                 trial = (n + t * (step.x() * e1 + step.y() * e2)).normalized();
-                if (eval(trial).f <= e.f + 1e-4 * t * slope) {
+                et = eval(trial);
+                if (et.f <= e.f + 1e-4 * t * slope) {
+                    moved = true;
+                    break;
+                }
+                if (settings_.roundoff_steps && -t * slope < f_noise && et.f <= e.f + f_noise &&
+                    (et.p - et.f * trial).norm() < g_norm) {
                     moved = true;
                     break;
                 }
@@ -137,11 +200,58 @@ class SupportMinimiser {
             if (!moved) {
                 // No decrease possible: f is flat to round-off here. Converged when the gradient
                 // is small (the depth error is then about |g|^2 / curvature, negligible).
-                return {n, g.norm() < 1e-7 * length_};
+                return {n, g.norm() < 1e-7 * length_, e};
+            }
+            // A full step means the model held: update dp/dn along it (Broyden: the least change
+            // with jac s = y) instead of new differences; after a shortened step, differences.
+            have_jac = settings_.secant_updates && t == 1.0;
+            if (have_jac) {
+                const Vec3 s = trial - n;
+                const Vec3 y = et.p - e.p;
+                const double ss = s.squaredNorm();
+                if (ss > 0.0) {
+                    jac += (y - jac * s) * s.transpose() / ss;
+                } else {
+                    have_jac = false;
+                }
             }
             n = trial;
+            e = et;
         }
-        return {n, false};
+        return {n, false, e};
+    }
+
+    /// dp/dn e1 and dp/dn e2 from the curvature: dp/dn on the tangent plane is the sum of the
+    /// two bodies' curvature-radius tensors, the inverses of their curvature tensors (the support
+    /// map inverts the Gauss map) at s_A(n) and s_B(-n). False (use differences) where a tensor
+    /// is not finite or not safely invertible (flat points, tips).
+    bool radius_tensors(const Eval& e, const Vec3& e1, const Vec3& e2,
+                        std::array<Vec3, 2>& dp) const {
+        Eigen::Matrix2d sum = Eigen::Matrix2d::Zero();
+        for (const auto& [body, point] : {std::pair{&a_, &e.sa}, std::pair{&b_, &e.sb}}) {
+            const Vec3 local = body->q.conjugate() * (*point - body->x);
+            const Mat3 k_body = body->shape->curvature_tensor(local);
+            const Vec3 t1 = body->q.conjugate() * e1;
+            const Vec3 t2 = body->q.conjugate() * e2;
+            const double k11 = t1.dot(k_body * t1);
+            const double k22 = t2.dot(k_body * t2);
+            const double k12 = 0.5 * (t1.dot(k_body * t2) + t2.dot(k_body * t1));
+            const double det = k11 * k22 - k12 * k12;
+            const double scale = body->length_scale();
+            // Curvature radii above 1e6 of the body's size (nearly flat) or a non-finite tensor:
+            // leave it to the differences.
+            if (!std::isfinite(det) || !(k11 > 0.0) || !(k22 > 0.0) ||
+                !(det > 1e-12 / (scale * scale) * (k11 + k22) * (k11 + k22))) {
+                return false;
+            }
+            sum(0, 0) += k22 / det;
+            sum(1, 1) += k11 / det;
+            sum(0, 1) -= k12 / det;
+        }
+        sum(1, 0) = sum(0, 1);
+        dp[0] = sum(0, 0) * e1 + sum(1, 0) * e2;
+        dp[1] = sum(0, 1) * e1 + sum(1, 1) * e2;
+        return true;
     }
 
     [[nodiscard]] double length() const { return length_; }
@@ -149,64 +259,77 @@ class SupportMinimiser {
   private:
     const PosedSuperquadric& a_;
     const PosedSuperquadric& b_;
+    const NewtonSettings& settings_;
     double length_ = 0.0;
+    bool blocky_ = false; ///< an exponent below kBlockyHessian: differences, not curvature
 };
 
 } // namespace
 
 ConvexContact support_newton_contact(const PosedSuperquadric& a, const PosedSuperquadric& b,
-                                     const Vec3* warm_normal) {
-    const SupportMinimiser m(a, b);
+                                     const Vec3* warm_normal, const NewtonSettings& settings,
+                                     const std::array<Vec3, 2>* warm_supports) {
+    const SupportMinimiser m(a, b, settings);
     if (warm_normal != nullptr) {
         int iterations = 0;
-        const auto [n, ok] = m.newton(-*warm_normal, iterations);
-        if (ok) {
+        const Vec3 n0 = -*warm_normal;
+        const NewtonEnd end =
+            warm_supports != nullptr
+                ? m.newton(n0, m.eval_from(n0, (*warm_supports)[0], (*warm_supports)[1]),
+                           iterations)
+                : m.newton(n0, iterations);
+        if (end.ok) {
             ConvexContact c;
-            c.depth = m.eval(n).f;
-            c.normal = -n;
+            c.depth = end.e.f;
+            c.normal = -end.n;
             c.converged = true;
             c.iterations = iterations;
             c.touching = c.depth > 0.0;
-            c.point = 0.5 * (a.support(-c.normal) + b.support(c.normal));
+            c.set_deepest(end.e.sa, end.e.sb);
             return c;
         }
     }
     // Candidate directions: the 26 directions to the faces, edges and corners of a cube, and the
     // centre line (n points from A towards B at the minimum when they overlap).
-    std::vector<std::pair<double, Vec3>> cand;
+    std::vector<std::pair<Eval, Vec3>> cand;
     for (int i = -1; i <= 1; ++i) {
         for (int j = -1; j <= 1; ++j) {
             for (int k = -1; k <= 1; ++k) {
                 if (i != 0 || j != 0 || k != 0) {
                     const Vec3 n = Vec3(i, j, k).normalized();
-                    cand.emplace_back(m.eval(n).f, n);
+                    cand.emplace_back(m.eval(n), n);
                 }
             }
         }
     }
     if ((b.x - a.x).norm() > 0.0) {
         const Vec3 n = (b.x - a.x).normalized();
-        cand.emplace_back(m.eval(n).f, n);
+        cand.emplace_back(m.eval(n), n);
     }
     std::partial_sort(cand.begin(), cand.begin() + kStarts, cand.end(),
-                      [](const auto& l, const auto& r) { return l.first < r.first; });
+                      [](const auto& l, const auto& r) { return l.first.f < r.first.f; });
     // Smallest f among the starts that converged (a start may stall near a maximum of f).
     ConvexContact best;
     best.depth = 1e300;
     best.converged = false;
     int iterations = 0;
+    Vec3 best_sa = Vec3::Zero();
+    Vec3 best_sb = Vec3::Zero();
     for (int s = 0; s < kStarts; ++s) {
-        const auto [n, ok] = m.newton(cand[static_cast<std::size_t>(s)].second, iterations);
-        const double f = m.eval(n).f;
-        if ((ok && !best.converged) || (ok == best.converged && f < best.depth)) {
+        const auto& start = cand[static_cast<std::size_t>(s)];
+        const NewtonEnd end = m.newton(start.second, start.first, iterations);
+        const double f = end.e.f;
+        if ((end.ok && !best.converged) || (end.ok == best.converged && f < best.depth)) {
             best.depth = f;
-            best.normal = -n;
-            best.converged = ok;
+            best.normal = -end.n;
+            best.converged = end.ok;
+            best_sa = end.e.sa;
+            best_sb = end.e.sb;
         }
     }
     best.iterations = iterations;
     best.touching = best.depth > 0.0;
-    best.point = 0.5 * (a.support(-best.normal) + b.support(best.normal));
+    best.set_deepest(best_sa, best_sb);
     return best;
 }
 

@@ -45,13 +45,24 @@ enum class ConvexMethod {
 
 /// Result of a narrow-phase query. Failures are reported, never thrown.
 struct ConvexContact {
-    bool touching = false;       ///< bodies overlap (depth > 0)
-    bool converged = true;       ///< false: the method hit its iteration limit or failed
-    double depth = 0.0;          ///< overlap (m); kSupportNewton: negative = gap when apart
-    Vec3 normal = Vec3::UnitX(); ///< unit normal from B towards A, world frame
-    Vec3 point = Vec3::Zero();   ///< contact point (m), world frame: midpoint of the deepest
-                                 ///< points of A and B along the normal
-    int iterations = 0;          ///< iterations used (Newton: summed over the starts)
+    bool touching = false;         ///< bodies overlap (depth > 0)
+    bool converged = true;         ///< false: the method hit its iteration limit or failed
+    double depth = 0.0;            ///< overlap (m); kSupportNewton: negative = gap when apart
+    Vec3 normal = Vec3::UnitX();   ///< unit normal from B towards A, world frame
+    Vec3 point = Vec3::Zero();     ///< contact point (m), world frame: midpoint of the deepest
+                                   ///< points of A and B along the normal
+    int iterations = 0;            ///< iterations used (Newton: summed over the starts)
+    bool deepest_known = false;    ///< deepest_a and deepest_b hold the supports along `normal`
+    Vec3 deepest_a = Vec3::Zero(); ///< A's deepest point s_A(-normal) (m), world frame
+    Vec3 deepest_b = Vec3::Zero(); ///< B's deepest point s_B(normal) (m), world frame
+
+    /// Sets the deepest points (world frame) and the contact point, their midpoint.
+    void set_deepest(const Vec3& sa, const Vec3& sb) {
+        deepest_known = true;
+        deepest_a = sa;
+        deepest_b = sb;
+        point = 0.5 * (sa + sb);
+    }
 };
 
 /// Local geometry of a contact for the contact laws and heat: relative principal curvatures in the
@@ -97,12 +108,44 @@ struct SupportTriangle {
 [[nodiscard]] ConvexContact ccd_contact(const PosedSuperquadric& a, const SupportTriangle& b,
                                         bool use_mpr);
 
+/// How Newton's method on the sphere of directions estimates its Hessian and judges its steps.
+/// Every setting converges to the same test (tangential gradient below 1e-9 of the summed largest
+/// half-axes); the defaults are the cheapest that keep validation 14 (docs/performance.md, "Cost
+/// per contact of superquadrics (session 11)"); fd_step = 1e-6 with roundoff_steps and
+/// secant_updates off gives the method of 2026-11-24, the reference of the tests.
+struct NewtonSettings {
+    /// Finite-difference step (rad) of the Hessian. Near a flat face the support map moves as
+    /// |d_t|^(1/(2/e - 1)) with the tangential direction d_t, so the Hessian changes within far
+    /// less than 1e-6 rad; 1e-8 rad resolves it and keeps the round-off of the difference (the
+    /// support map's 1.6e-13 relative over the step) near 1e-5 of the curvature radius.
+    double fd_step = 1e-8;
+    /// Central differences (4 evaluations); forward ones (2) are cheaper and converge as well,
+    /// but their one-sided Hessian shifted where the runs stop within the tolerance in a way that
+    /// did not cancel over steps: validation 14 (superquadrics, linear law) fell from order 1.73
+    /// to 1.52 with them.
+    bool central_differences = true;
+    /// Where the decrease a step promises is below the round-off of f, accept a step that keeps
+    /// f within its round-off and shrinks the gradient (instead of 20 halvings and a stop).
+    bool roundoff_steps = true;
+    /// After a full Newton step, update dp/dn by Broyden's secant formula (no evaluations)
+    /// instead of new differences; after a shortened step, differences again.
+    bool secant_updates = true;
+    /// The first Hessian of a run from the two bodies' curvature tensors at the current supports
+    /// (their inverses, the curvature radii, summed) instead of differences; differences where a
+    /// point is nearly flat or a tip, and for pairs with an exponent below 0.5 (blocky).
+    bool analytic_hessian = true;
+};
+
 /// Newton's method on the sphere of directions (convex_contact.cpp). Without `warm_normal` it
 /// samples 27 directions and runs Newton from the best 4 (robust, slow: a reference). With the
 /// previous step's normal (unit, from B to A, world frame) it runs one Newton from there (the DEM
 /// use: the pose changes little per step) and falls back to the cold start when that fails.
-[[nodiscard]] ConvexContact support_newton_contact(const PosedSuperquadric& a,
-                                                   const PosedSuperquadric& b,
-                                                   const Vec3* warm_normal = nullptr);
+/// `warm_supports`, with `warm_normal` only: the caller's s_A(-warm_normal) and s_B(warm_normal)
+/// (m, world frame), e.g. from its own separation test along the warm normal, so that Newton's
+/// first evaluation is not repeated.
+[[nodiscard]] ConvexContact
+support_newton_contact(const PosedSuperquadric& a, const PosedSuperquadric& b,
+                       const Vec3* warm_normal = nullptr, const NewtonSettings& settings = {},
+                       const std::array<Vec3, 2>* warm_supports = nullptr);
 
 } // namespace kiln::geometry

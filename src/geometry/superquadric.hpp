@@ -43,8 +43,9 @@ struct Superquadric {
     /// Closed form from grad F parallel to d (derivation in docs/theory/shapes.md).
     [[nodiscard]] Vec3 support(const Vec3& d_body) const;
     /// Curvature tensor (1/m) at a surface point p, body frame: the shape operator P H P / |grad F|
-    /// (P the projector on the tangent plane); zero along the normal.
-    [[nodiscard]] Mat3 curvature_tensor(const Vec3& p_body) const;
+    /// (P the projector on the tangent plane); zero along the normal. With `normal_out`, also the
+    /// outward unit normal there (body frame).
+    [[nodiscard]] Mat3 curvature_tensor(const Vec3& p_body, Vec3* normal_out = nullptr) const;
     /// Principal curvatures (1/m, >= 0 on a convex body; smaller first) at a surface point p.
     /// Radii are their inverses; a flat point gives 0 (infinite radius), a tip (exponent > 1 at a
     /// pole) gives infinity for both (zero radius).

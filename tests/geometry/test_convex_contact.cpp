@@ -197,6 +197,79 @@ TEST(ConvexContact, WarmStartedNewtonFindsTheColdStartResult) {
     EXPECT_EQ(fell_back, 0);
 }
 
+// The default settings of Newton's method (differences at 1e-8 rad, steps judged by the gradient
+// where f is flat to round-off, Broyden updates of the Hessian) against those of 2026-11-24
+// (differences at 1e-6 rad, Armijo only, new differences at every iteration) over random poses of
+// the six shapes of EpaAndNewtonAgreeOverRandomPoses, cold and warm (previous normal turned by 0.02
+// rad) starts. Both stop on the same test, a tangential gradient |g| below kGradTol = 1e-9 L, so
+// the two minima agree to what that test pins: the depth to |g|^2 / lambda and the normal to |g| /
+// lambda (lambda the smallest eigenvalue of the Hessian of f, the summed curvature radius: at least
+// ~1e-2 L for these shapes), i.e. 1e-16 L and 2e-7 rad, plus the round-off of f (1e-16 of the
+// coordinates). Both have to converge.
+TEST(ConvexContact, DefaultNewtonSettingsAgreeWithTheReferenceSettings) {
+    const std::vector<g::Superquadric> shapes = {
+        make(Vec3(1.0, 2.0, 3.0), 1.0, 1.0), make(Vec3(1.0, 1.0, 1.0), 0.5, 0.5),
+        make(Vec3(1.0, 1.0, 1.0), 0.3, 0.3), make(Vec3(1.0, 1.0, 1.5), 0.3, 1.0),
+        make(Vec3(2.0, 2.0, 0.6), 0.4, 0.4), make(Vec3(0.5, 0.5, 5.0), 1.0, 1.0),
+        make(Vec3(1.0, 1.0, 1.0), 0.8, 0.8)};
+    g::NewtonSettings reference;
+    reference.fd_step = 1e-6;
+    reference.central_differences = true;
+    reference.roundoff_steps = false;
+    reference.secant_updates = false;
+    reference.analytic_hessian = false;
+    std::mt19937_64 rng(611);
+    std::normal_distribution<double> nd;
+    std::uniform_real_distribution<double> ud(0.0, 1.0);
+    const auto random_quat = [&] { return Quat(nd(rng), nd(rng), nd(rng), nd(rng)).normalized(); };
+    const int trials = 1400;
+    double worst_depth = 0.0;
+    double worst_angle = 0.0;
+    long iterations_new = 0;
+    long iterations_ref = 0;
+    int unconverged_new = 0;
+    int unconverged_ref = 0;
+    for (int trial = 0; trial < trials; ++trial) {
+        const auto& sa = shapes[static_cast<std::size_t>(trial) % shapes.size()];
+        const auto& sb = shapes[static_cast<std::size_t>(trial / 7) % shapes.size()];
+        g::PosedSuperquadric a{&sa, Vec3::Zero(), random_quat()};
+        g::PosedSuperquadric b{&sb, Vec3::Zero(), random_quat()};
+        const Vec3 u = Vec3(nd(rng), nd(rng), nd(rng)).normalized();
+        const double scale = sa.half_axes.maxCoeff() + sb.half_axes.maxCoeff();
+        const double overlap = scale * std::pow(10.0, -4.0 + 2.7 * ud(rng));
+        b.x = a.support(u) - overlap * u - b.support(-u);
+        const g::ConvexContact cold_new = g::support_newton_contact(a, b, nullptr);
+        const g::ConvexContact cold_ref = g::support_newton_contact(a, b, nullptr, reference);
+        const Vec3 turned =
+            (Quat(Eigen::AngleAxisd(0.02, cold_ref.normal.unitOrthogonal())) * cold_ref.normal)
+                .normalized();
+        const g::ConvexContact warm_new = g::support_newton_contact(a, b, &turned);
+        const g::ConvexContact warm_ref = g::support_newton_contact(a, b, &turned, reference);
+        unconverged_new += (cold_new.converged ? 0 : 1) + (warm_new.converged ? 0 : 1);
+        unconverged_ref += (cold_ref.converged ? 0 : 1) + (warm_ref.converged ? 0 : 1);
+        iterations_new += cold_new.iterations + warm_new.iterations;
+        iterations_ref += cold_ref.iterations + warm_ref.iterations;
+        for (const auto& [x, y] : {std::pair{&cold_new, &cold_ref}, std::pair{&warm_new, &warm_ref},
+                                   std::pair{&warm_new, &cold_ref}}) {
+            if (!x->converged || !y->converged) {
+                continue;
+            }
+            worst_depth = std::max(worst_depth, std::abs(x->depth - y->depth) / scale);
+            worst_angle = std::max(worst_angle, std::acos(std::min(1.0, x->normal.dot(y->normal))));
+        }
+    }
+    std::printf("defaults against the reference settings: worst depth difference %.3g L, worst "
+                "normal angle %.3g rad; unconverged %d (defaults) and %d (reference) of %d; Newton "
+                "iterations %ld and %ld\n",
+                worst_depth, worst_angle, unconverged_new, unconverged_ref, 2 * trials,
+                iterations_new, iterations_ref);
+    constexpr double kDepthSame = 1e-14; // round-off of f and |g|^2 / lambda
+    constexpr double kAngleSame = 1e-6;  // |g| / lambda with lambda >= 1e-3 L, twice
+    EXPECT_LT(worst_depth, kDepthSame);
+    EXPECT_LT(worst_angle, kAngleSame);
+    EXPECT_LE(unconverged_new, unconverged_ref);
+}
+
 TEST(ConvexContact, RelativeCurvatureOfSpheresAndAnEllipsoidTip) {
     // Spheres r1, r2: both relative curvatures 1/r1 + 1/r2, R_e = r1 r2 / (r1 + r2).
     const g::Superquadric s1 = make(Vec3::Constant(1.0), 1.0, 1.0);
