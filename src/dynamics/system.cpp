@@ -202,19 +202,48 @@ void System::check_time_step() {
 
 void System::rebuild_neighbours() {
     const std::vector<std::uint32_t> order = nl_.build(p_, spec_.sort_particles);
-    const std::size_t nw = spec_.walls.size();
-    if (!order.empty() && nw > 0) {
-        std::vector<Vec3> s(wall_shear_.size());
-        for (std::size_t k = 0; k < order.size(); ++k) {
-            for (std::size_t w = 0; w < nw; ++w) {
-                s[k * nw + w] = wall_shear_[order[k] * nw + w];
-            }
-        }
-        wall_shear_.swap(s);
-    }
     index_partners();
+    std::vector<std::vector<std::uint32_t>> old_candidates;
+    old_candidates.swap(wall_candidates_);
     find_wall_candidates();
+    if (!order.empty() && !spec_.walls.empty()) {
+        carry_wall_histories(order, old_candidates);
+    }
     list_valid_ = true;
+}
+
+void System::carry_wall_histories(const std::vector<std::uint32_t>& order,
+                                  const std::vector<std::vector<std::uint32_t>>& old_candidates) {
+    // Only the candidates of the last build can hold a wall history: the others were not tested
+    // since it, and a candidate's history is cleared at every step it does not touch. So the
+    // histories of those candidates are moved to their particles' new places, and only if the
+    // particle is a candidate of the same wall again (one that is not is more than a skin from the
+    // wall, its history is stale). The rest of the array stays zero, and so does the spare array,
+    // which takes the place of wall_shear_: every moved history is zeroed where it was.
+    const std::size_t n = p_.size();
+    const std::size_t nw = spec_.walls.size();
+    new_place_.resize(n);
+    for (std::size_t k = 0; k < n; ++k) {
+        new_place_[order[k]] = static_cast<std::uint32_t>(k);
+    }
+    wall_mark_.assign(n * nw, 0);
+    for (std::size_t w = 0; w < nw; ++w) {
+        for (const std::uint32_t i : wall_candidates_[w]) {
+            wall_mark_[i * nw + w] = 1;
+        }
+    }
+    wall_shear_spare_.resize(wall_shear_.size(), Vec3::Zero());
+    for (std::size_t w = 0; w < std::min(nw, old_candidates.size()); ++w) {
+        for (const std::uint32_t i : old_candidates[w]) {
+            Vec3& s = wall_shear_[i * nw + w];
+            const std::size_t to = new_place_[i] * nw + w;
+            if (wall_mark_[to] != 0) {
+                wall_shear_spare_[to] = s;
+            }
+            s.setZero();
+        }
+    }
+    wall_shear_.swap(wall_shear_spare_);
 }
 
 void System::index_bodies() {
@@ -274,19 +303,20 @@ void System::find_wall_candidates() {
     // next rebuild: it is at most skin/2 from its position at the last build, so at most a skin
     // from where it is now.
     const std::size_t nw = spec_.walls.size();
-    wall_candidates_.assign(nw, {});
+    wall_candidates_.resize(nw);
     for (std::size_t w = 0; w < nw; ++w) {
-        for (std::size_t i = 0; i < p_.size(); ++i) {
-            if (p_.shape[i] >= 0) {
-                continue; // bodies meet walls in body_forces()
-            }
-            const WallContact wc = std::visit(
-                [&](const auto& shape) { return wall_contact(shape, p_.x[i], p_.radius[i]); },
-                spec_.walls[w].shape);
-            if (wc.overlap > -nl_.skin()) {
-                wall_candidates_[w].push_back(static_cast<std::uint32_t>(i));
-            }
-        }
+        std::vector<std::uint32_t>& cand = wall_candidates_[w];
+        cand.clear();
+        std::visit(
+            [&](const auto& shape) {
+                for (std::size_t i = 0; i < p_.size(); ++i) {
+                    if (p_.shape[i] < 0 &&
+                        wall_contact(shape, p_.x[i], p_.radius[i]).overlap > -nl_.skin()) {
+                        cand.push_back(static_cast<std::uint32_t>(i)); // bodies: body_forces()
+                    }
+                }
+            },
+            spec_.walls[w].shape);
     }
     // Bodies: the same test with the bounding sphere, body by body (body_forces() loops so).
     body_wall_offsets_.assign(bodies_.size() + 1, 0);
