@@ -180,7 +180,7 @@ std::size_t NeighbourList::search_unsorted(const ParticleStore& p, const CellGri
 
 void NeighbourList::carry_histories(const ParticleStore& p,
                                     const std::vector<std::int64_t>& old_ids,
-                                    const std::vector<std::uint32_t>& old_offsets,
+                                    const std::vector<std::uint32_t>& old_owners,
                                     const std::vector<std::uint32_t>& old_partners,
                                     const std::vector<Vec3>& old_shear) {
     // Only entries with a history are looked for: the pair loop clears the history of a pair that
@@ -201,15 +201,36 @@ void NeighbourList::carry_histories(const ParticleStore& p,
         }
         return none;
     };
-    const std::size_t n_old = old_ids.size();
-#pragma omp parallel for num_threads(threads_) schedule(static)
-    for (std::size_t oa = 0; oa < n_old; ++oa) {
-        for (std::uint32_t k = old_offsets[oa]; k < old_offsets[oa + 1]; ++k) {
+    // Entries with a history are picked without a branch (whether a pair touched is random
+    // along the list), then looked up; each thread takes a contiguous part of the old list.
+    const std::size_t n_entries = old_partners.size();
+    if (thread_held_.size() < static_cast<std::size_t>(threads_)) {
+        thread_held_.resize(static_cast<std::size_t>(threads_));
+    }
+#pragma omp parallel num_threads(threads_)
+    {
+        int t = 0;
+        int nt = 1;
+#ifdef _OPENMP
+        t = omp_get_thread_num();
+        nt = omp_get_num_threads();
+#endif
+        const std::size_t k0 =
+            n_entries * static_cast<std::size_t>(t) / static_cast<std::size_t>(nt);
+        const std::size_t k1 =
+            n_entries * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(nt);
+        std::vector<std::uint32_t>& held = thread_held_[static_cast<std::size_t>(t)];
+        held.resize(k1 - k0);
+        std::size_t m = 0;
+        for (std::size_t k = k0; k < k1; ++k) {
             const Vec3& s = old_shear[k];
-            if (s[0] == 0.0 && s[1] == 0.0 && s[2] == 0.0) {
-                continue;
-            }
-            const std::uint32_t a = new_row_of_id_[static_cast<std::size_t>(old_ids[oa])];
+            held[m] = static_cast<std::uint32_t>(k);
+            m += static_cast<std::size_t>((s[0] != 0.0) | (s[1] != 0.0) | (s[2] != 0.0));
+        }
+        for (std::size_t h = 0; h < m; ++h) {
+            const std::uint32_t k = held[h];
+            const std::uint32_t a =
+                new_row_of_id_[static_cast<std::size_t>(old_ids[old_owners[k]])];
             const std::uint32_t b =
                 new_row_of_id_[static_cast<std::size_t>(old_ids[old_partners[k]])];
             if (a == none || b == none) {
@@ -217,9 +238,9 @@ void NeighbourList::carry_histories(const ParticleStore& p,
             }
             // Each unordered pair is in one row only, of the old list and of the new one.
             if (const std::uint32_t e = entry(a, b); e != none) {
-                shear_[e] = s;
+                shear_[e] = old_shear[k];
             } else if (const std::uint32_t f = entry(b, a); f != none) {
-                shear_[f] = -s;
+                shear_[f] = -old_shear[k];
             }
         }
     }
@@ -251,12 +272,28 @@ void NeighbourList::restore(std::vector<std::uint32_t> offsets, std::vector<std:
 }
 
 void NeighbourList::fill_owners() {
-    owners_.resize(partners_.size());
+    const std::size_t entries = partners_.size();
+#if defined(__AVX512F__)
+    // Sixteen copies of i per store, row after row: the stores past a row's end are overwritten by
+    // the next rows (rows are short; the loop over a row's length would mispredict).
+    owners_.resize(entries + 16);
+    for (std::size_t i = 0; i + 1 < offsets_.size(); ++i) {
+        const __m512i own = _mm512_set1_epi32(static_cast<int>(i));
+        std::uint32_t k = offsets_[i];
+        do {
+            _mm512_storeu_si512(owners_.data() + k, own);
+            k += 16;
+        } while (k < offsets_[i + 1]);
+    }
+    owners_.resize(entries);
+#else
+    owners_.resize(entries);
     for (std::size_t i = 0; i + 1 < offsets_.size(); ++i) {
         for (std::uint32_t k = offsets_[i]; k < offsets_[i + 1]; ++k) {
             owners_[k] = static_cast<std::uint32_t>(i);
         }
     }
+#endif
 }
 
 std::vector<std::uint32_t> NeighbourList::build(ParticleStore& p, bool sort) {
@@ -266,6 +303,7 @@ std::vector<std::uint32_t> NeighbourList::build(ParticleStore& p, bool sort) {
     // Keep the old list (with old indices and ids) for the history transfer.
     std::vector<std::uint32_t> old_offsets = std::move(offsets_);
     std::vector<std::uint32_t> old_partners = std::move(partners_);
+    std::vector<std::uint32_t> old_owners = std::move(owners_);
     std::vector<Vec3> old_shear = std::move(shear_);
     const bool have_old = old_offsets.size() == old_ids_.size() + 1 && !old_ids_.empty();
 
@@ -370,7 +408,7 @@ std::vector<std::uint32_t> NeighbourList::build(ParticleStore& p, bool sort) {
 
     shear_.assign(partners_.size(), Vec3::Zero());
     if (have_old) {
-        carry_histories(p, prev_ids, old_offsets, old_partners, old_shear);
+        carry_histories(p, prev_ids, old_owners, old_partners, old_shear);
     }
 
     fill_owners();

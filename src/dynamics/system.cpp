@@ -304,19 +304,27 @@ void System::find_wall_candidates() {
     // from where it is now.
     const std::size_t nw = spec_.walls.size();
     wall_candidates_.resize(nw);
-    for (std::size_t w = 0; w < nw; ++w) {
-        std::vector<std::uint32_t>& cand = wall_candidates_[w];
+    for (auto& cand : wall_candidates_) {
         cand.clear();
-        std::visit(
-            [&](const auto& shape) {
-                for (std::size_t i = 0; i < p_.size(); ++i) {
-                    if (p_.shape[i] < 0 &&
-                        wall_contact(shape, p_.x[i], p_.radius[i]).overlap > -nl_.skin()) {
-                        cand.push_back(static_cast<std::uint32_t>(i)); // bodies: body_forces()
+    }
+    // Particles in blocks that stay in the L1 cache while every wall tests them (one variant
+    // dispatch per wall and block); each wall's candidates stay in increasing index order.
+    constexpr std::size_t span = 512;
+    for (std::size_t b0 = 0; b0 < p_.size(); b0 += span) {
+        const std::size_t b1 = std::min(p_.size(), b0 + span);
+        for (std::size_t w = 0; w < nw; ++w) {
+            std::vector<std::uint32_t>& cand = wall_candidates_[w];
+            std::visit(
+                [&](const auto& shape) {
+                    for (std::size_t i = b0; i < b1; ++i) {
+                        if (p_.shape[i] < 0 &&
+                            wall_contact(shape, p_.x[i], p_.radius[i]).overlap > -nl_.skin()) {
+                            cand.push_back(static_cast<std::uint32_t>(i)); // bodies: body_forces()
+                        }
                     }
-                }
-            },
-            spec_.walls[w].shape);
+                },
+                spec_.walls[w].shape);
+        }
     }
     // Bodies: the same test with the bounding sphere, body by body (body_forces() loops so).
     body_wall_offsets_.assign(bodies_.size() + 1, 0);
