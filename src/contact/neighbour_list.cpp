@@ -5,7 +5,7 @@
 #include <limits>
 
 #if defined(__AVX512F__)
-#include <immintrin.h>
+#include "core/records_avx512.hpp"
 #endif
 
 #ifdef _OPENMP
@@ -26,14 +26,6 @@ std::size_t scan_range(const Vec3* x, const double* radius, const Vec3& xi, doub
                        std::uint32_t j0, std::uint32_t j1, std::uint32_t* out) {
     std::size_t m = 0;
 #if defined(__AVX512F__)
-    static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 records are packed");
-    // Eight records (24 doubles in three registers) turned into one register per component.
-    const __m512i x_lo = _mm512_setr_epi64(0, 3, 6, 9, 12, 15, 0, 0);
-    const __m512i x_hi = _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 10, 13);
-    const __m512i y_lo = _mm512_setr_epi64(1, 4, 7, 10, 13, 0, 0, 0);
-    const __m512i y_hi = _mm512_setr_epi64(0, 1, 2, 3, 4, 8, 11, 14);
-    const __m512i z_lo = _mm512_setr_epi64(2, 5, 8, 11, 14, 0, 0, 0);
-    const __m512i z_hi = _mm512_setr_epi64(0, 1, 2, 3, 4, 9, 12, 15);
     const __m512d cx = _mm512_set1_pd(xi[0]);
     const __m512d cy = _mm512_set1_pd(xi[1]);
     const __m512d cz = _mm512_set1_pd(xi[2]);
@@ -42,17 +34,10 @@ std::size_t scan_range(const Vec3* x, const double* radius, const Vec3& xi, doub
     for (std::uint32_t j = j0; j < j1; j += 8) {
         const std::uint32_t k = std::min<std::uint32_t>(8, j1 - j);
         const __mmask8 rec = static_cast<__mmask8>((1U << k) - 1U);
-        const std::uint32_t dm = (1U << (3 * k)) - 1U; // doubles of the k records
-        const double* base = x[j].data();
-        const __m512d a0 = _mm512_maskz_loadu_pd(static_cast<__mmask8>(dm), base);
-        const __m512d a1 = _mm512_maskz_loadu_pd(static_cast<__mmask8>(dm >> 8), base + 8);
-        const __m512d a2 = _mm512_maskz_loadu_pd(static_cast<__mmask8>(dm >> 16), base + 16);
-        const __m512d px = _mm512_permutex2var_pd(_mm512_permutex2var_pd(a0, x_lo, a1), x_hi, a2);
-        const __m512d py = _mm512_permutex2var_pd(_mm512_permutex2var_pd(a0, y_lo, a1), y_hi, a2);
-        const __m512d pz = _mm512_permutex2var_pd(_mm512_permutex2var_pd(a0, z_lo, a1), z_hi, a2);
-        const __m512d dx = _mm512_sub_pd(px, cx);
-        const __m512d dy = _mm512_sub_pd(py, cy);
-        const __m512d dz = _mm512_sub_pd(pz, cz);
+        const Columns8 c = load_columns8(x + j, k);
+        const __m512d dx = _mm512_sub_pd(c.x, cx);
+        const __m512d dy = _mm512_sub_pd(c.y, cy);
+        const __m512d dz = _mm512_sub_pd(c.z, cz);
         // The empty asm statements keep the compiler from fusing a product into the sum.
         __m512d sx = _mm512_mul_pd(dx, dx);
         __m512d sy = _mm512_mul_pd(dy, dy);
