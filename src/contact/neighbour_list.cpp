@@ -363,6 +363,8 @@ std::vector<std::uint32_t> NeighbourList::build(ParticleStore& p, bool sort) {
         thread_partners_.resize(static_cast<std::size_t>(threads_));
         thread_count_.resize(static_cast<std::size_t>(threads_));
     }
+    // A thread the runtime did not start adds nothing (no count left from an earlier build).
+    std::fill(thread_count_.begin(), thread_count_.end(), std::size_t{0});
 #pragma omp parallel num_threads(threads_)
     {
         int t = 0;
