@@ -305,8 +305,8 @@ namespace {
 /// with the plane, r_i - (x_i - point).normal, exceeds -skin (m, world frame).
 void plane_candidates(const PlaneWall& w, const ParticleStore& p, std::size_t b0, std::size_t b1,
                       double skin, std::vector<std::uint32_t>& out) {
-    std::size_t m = out.size();
 #if defined(__AVX512F__)
+    std::size_t m = out.size();
     // Eight particles at a time, the hits compressed into place (no branch per particle). A
     // rounding difference from the scalar test can only matter a skin away from the wall, where
     // a particle cannot touch it before the next build.
