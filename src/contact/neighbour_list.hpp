@@ -59,9 +59,27 @@ class NeighbourList {
     void fill_owners();
     std::vector<Vec3> x_build_;
     // Scratch reused between builds.
-    std::vector<std::uint32_t> cell_of_, cell_start_, order_, old_row_of_id_;
+    std::vector<std::uint32_t> cell_of_, cell_start_, order_, new_row_of_id_;
     std::vector<std::int64_t> old_ids_;
+    // Partners found by each thread (buffers only grow) and how many of them are this build's.
     std::vector<std::vector<std::uint32_t>> thread_partners_;
+    std::vector<std::size_t> thread_count_;
+    std::vector<std::vector<std::uint32_t>> thread_held_; // entries with a history (scratch)
+
+    struct CellGrid;
+    /// Partners of particles [i0, i1) into `buf` (from its start), row lengths into offsets_;
+    /// returns how many. search_sorted needs the store sorted by cell, search_unsorted reads the
+    /// cells through order_.
+    std::size_t search_sorted(const ParticleStore& p, const CellGrid& g, std::size_t i0,
+                              std::size_t i1, std::vector<std::uint32_t>& buf);
+    std::size_t search_unsorted(const ParticleStore& p, const CellGrid& g, std::size_t i0,
+                                std::size_t i1, std::vector<std::uint32_t>& buf);
+    /// Sets shear_ of the new list from the old list's histories (owners and partners of the old
+    /// entries by old index, `old_ids` the particle ids by old index).
+    void carry_histories(const ParticleStore& p, const std::vector<std::int64_t>& old_ids,
+                         const std::vector<std::uint32_t>& old_owners,
+                         const std::vector<std::uint32_t>& old_partners,
+                         const std::vector<Vec3>& old_shear);
 };
 
 } // namespace kiln::contact

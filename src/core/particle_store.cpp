@@ -1,5 +1,6 @@
 #include "core/particle_store.hpp"
 
+#include <algorithm>
 #include <numbers>
 
 namespace kiln {
@@ -74,12 +75,14 @@ void ParticleStore::permute(const std::vector<std::uint32_t>& order) {
     permute_array(torque, order, sv);
     permute_array(ang_mom, order, sv);
     permute_array(inertia, order, sv);
-    {
+    // A store of spheres only has shape -1 and the identity orientation everywhere (see the
+    // header): reordering those two arrays would change nothing.
+    if (std::any_of(shape.begin(), shape.end(), [](std::int32_t s) { return s != -1; })) {
         std::vector<std::int32_t> s;
         permute_array(shape, order, s);
+        std::vector<Quat> sq;
+        permute_array(q, order, sq);
     }
-    std::vector<Quat> sq;
-    permute_array(q, order, sq);
 }
 
 void ParticleStore::clear_forces() {

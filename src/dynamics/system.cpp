@@ -2,6 +2,7 @@
 
 #include "contact/contact_law.hpp"
 #include "core/error.hpp"
+#include "core/records_avx512.hpp"
 #include "dynamics/pair_simd.hpp"
 #include "dynamics/time_step.hpp"
 #include "geometry/rotation.hpp"
@@ -202,19 +203,48 @@ void System::check_time_step() {
 
 void System::rebuild_neighbours() {
     const std::vector<std::uint32_t> order = nl_.build(p_, spec_.sort_particles);
-    const std::size_t nw = spec_.walls.size();
-    if (!order.empty() && nw > 0) {
-        std::vector<Vec3> s(wall_shear_.size());
-        for (std::size_t k = 0; k < order.size(); ++k) {
-            for (std::size_t w = 0; w < nw; ++w) {
-                s[k * nw + w] = wall_shear_[order[k] * nw + w];
-            }
-        }
-        wall_shear_.swap(s);
-    }
     index_partners();
+    std::vector<std::vector<std::uint32_t>> old_candidates;
+    old_candidates.swap(wall_candidates_);
     find_wall_candidates();
+    if (!order.empty() && !spec_.walls.empty()) {
+        carry_wall_histories(order, old_candidates);
+    }
     list_valid_ = true;
+}
+
+void System::carry_wall_histories(const std::vector<std::uint32_t>& order,
+                                  const std::vector<std::vector<std::uint32_t>>& old_candidates) {
+    // Only the candidates of the last build can hold a wall history: the others were not tested
+    // since it, and a candidate's history is cleared at every step it does not touch. So the
+    // histories of those candidates are moved to their particles' new places, and only if the
+    // particle is a candidate of the same wall again (one that is not is more than a skin from the
+    // wall, its history is stale). The rest of the array stays zero, and so does the spare array,
+    // which takes the place of wall_shear_: every moved history is zeroed where it was.
+    const std::size_t n = p_.size();
+    const std::size_t nw = spec_.walls.size();
+    new_place_.resize(n);
+    for (std::size_t k = 0; k < n; ++k) {
+        new_place_[order[k]] = static_cast<std::uint32_t>(k);
+    }
+    wall_mark_.assign(n * nw, 0);
+    for (std::size_t w = 0; w < nw; ++w) {
+        for (const std::uint32_t i : wall_candidates_[w]) {
+            wall_mark_[i * nw + w] = 1;
+        }
+    }
+    wall_shear_spare_.resize(wall_shear_.size(), Vec3::Zero());
+    for (std::size_t w = 0; w < std::min(nw, old_candidates.size()); ++w) {
+        for (const std::uint32_t i : old_candidates[w]) {
+            Vec3& s = wall_shear_[i * nw + w];
+            const std::size_t to = new_place_[i] * nw + w;
+            if (wall_mark_[to] != 0) {
+                wall_shear_spare_[to] = s;
+            }
+            s.setZero();
+        }
+    }
+    wall_shear_.swap(wall_shear_spare_);
 }
 
 void System::index_bodies() {
@@ -269,23 +299,84 @@ void System::index_partners() {
     rekey_body_contacts(); // the list or the particle order changed
 }
 
+namespace {
+
+/// Appends to `out`, in increasing order, the spheres i of [b0, b1) (shape < 0) whose overlap
+/// with the plane, r_i - (x_i - point).normal, exceeds -skin (m, world frame).
+void plane_candidates(const PlaneWall& w, const ParticleStore& p, std::size_t b0, std::size_t b1,
+                      double skin, std::vector<std::uint32_t>& out) {
+#if defined(__AVX512F__)
+    std::size_t m = out.size();
+    // Eight particles at a time, the hits compressed into place (no branch per particle). A
+    // rounding difference from the scalar test can only matter a skin away from the wall, where
+    // a particle cannot touch it before the next build.
+    out.resize(m + (b1 - b0) + 16);
+    const __m512d px = _mm512_set1_pd(w.point[0]);
+    const __m512d py = _mm512_set1_pd(w.point[1]);
+    const __m512d pz = _mm512_set1_pd(w.point[2]);
+    const __m512d nx = _mm512_set1_pd(w.normal[0]);
+    const __m512d ny = _mm512_set1_pd(w.normal[1]);
+    const __m512d nz = _mm512_set1_pd(w.normal[2]);
+    const __m512d lim = _mm512_set1_pd(-skin);
+    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 0, 0, 0, 0, 0, 0, 0, 0);
+    for (std::size_t i = b0; i < b1; i += 8) {
+        const auto k = static_cast<unsigned>(std::min<std::size_t>(8, b1 - i));
+        const auto rec = static_cast<__mmask8>((1U << k) - 1U);
+        const Columns8 c = load_columns8(p.x.data() + i, k);
+        const __m512d d = _mm512_fmadd_pd(
+            _mm512_sub_pd(c.z, pz), nz,
+            _mm512_fmadd_pd(_mm512_sub_pd(c.y, py), ny, _mm512_mul_pd(_mm512_sub_pd(c.x, px), nx)));
+        const __m512d overlap = _mm512_sub_pd(_mm512_maskz_loadu_pd(rec, p.radius.data() + i), d);
+        const __mmask16 sphere = _mm512_mask_cmplt_epi32_mask(
+            rec, _mm512_maskz_loadu_epi32(rec, p.shape.data() + i), _mm512_setzero_si512());
+        const auto hit = static_cast<__mmask16>(
+            _mm512_mask_cmp_pd_mask(static_cast<__mmask8>(sphere), overlap, lim, _CMP_GT_OQ));
+        const __m512i idx = _mm512_add_epi32(_mm512_set1_epi32(static_cast<int>(i)), lane);
+        _mm512_storeu_si512(out.data() + m, _mm512_maskz_compress_epi32(hit, idx));
+        m += static_cast<std::size_t>(__builtin_popcount(hit));
+    }
+    out.resize(m);
+#else
+    for (std::size_t i = b0; i < b1; ++i) {
+        if (p.shape[i] < 0 && wall_contact(w, p.x[i], p.radius[i]).overlap > -skin) {
+            out.push_back(static_cast<std::uint32_t>(i));
+        }
+    }
+#endif
+}
+
+} // namespace
+
 void System::find_wall_candidates() {
     // Particles within the skin of a wall. A particle further away cannot reach the wall before the
     // next rebuild: it is at most skin/2 from its position at the last build, so at most a skin
     // from where it is now.
     const std::size_t nw = spec_.walls.size();
-    wall_candidates_.assign(nw, {});
-    for (std::size_t w = 0; w < nw; ++w) {
-        for (std::size_t i = 0; i < p_.size(); ++i) {
-            if (p_.shape[i] >= 0) {
-                continue; // bodies meet walls in body_forces()
+    wall_candidates_.resize(nw);
+    for (auto& cand : wall_candidates_) {
+        cand.clear();
+    }
+    // Particles in blocks that stay in the L1 cache while every wall tests them (one variant
+    // dispatch per wall and block); each wall's candidates stay in increasing index order.
+    constexpr std::size_t span = 512;
+    for (std::size_t b0 = 0; b0 < p_.size(); b0 += span) {
+        const std::size_t b1 = std::min(p_.size(), b0 + span);
+        for (std::size_t w = 0; w < nw; ++w) {
+            std::vector<std::uint32_t>& cand = wall_candidates_[w];
+            if (const auto* plane = std::get_if<PlaneWall>(&spec_.walls[w].shape)) {
+                plane_candidates(*plane, p_, b0, b1, nl_.skin(), cand);
+                continue;
             }
-            const WallContact wc = std::visit(
-                [&](const auto& shape) { return wall_contact(shape, p_.x[i], p_.radius[i]); },
+            std::visit(
+                [&](const auto& shape) {
+                    for (std::size_t i = b0; i < b1; ++i) {
+                        if (p_.shape[i] < 0 &&
+                            wall_contact(shape, p_.x[i], p_.radius[i]).overlap > -nl_.skin()) {
+                            cand.push_back(static_cast<std::uint32_t>(i)); // bodies: body_forces()
+                        }
+                    }
+                },
                 spec_.walls[w].shape);
-            if (wc.overlap > -nl_.skin()) {
-                wall_candidates_[w].push_back(static_cast<std::uint32_t>(i));
-            }
         }
     }
     // Bodies: the same test with the bounding sphere, body by body (body_forces() loops so).

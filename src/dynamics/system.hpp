@@ -208,12 +208,21 @@ class System {
     void rebuild_neighbours();
     void index_partners();
     void find_wall_candidates();
+    /// Moves the wall histories of the last build's candidates (`old_candidates`, old indices)
+    /// to the particles' new places after the store was reordered (new k <- old order[k]).
+    void carry_wall_histories(const std::vector<std::uint32_t>& order,
+                              const std::vector<std::vector<std::uint32_t>>& old_candidates);
 
     SceneSpec spec_;
     PairTable pairs_;
     ParticleStore p_;
     contact::NeighbourList nl_;
     std::vector<Vec3> wall_shear_; // [particle * n_walls + wall]
+    // Scratch of carry_wall_histories: an all-zero array of wall_shear_'s size, the new place of
+    // each particle and a flag per (particle, wall) of the new candidates.
+    std::vector<Vec3> wall_shear_spare_;
+    std::vector<std::uint32_t> new_place_;
+    std::vector<std::uint8_t> wall_mark_;
     std::vector<std::vector<std::uint32_t>> wall_candidates_;
     std::vector<int> wall_material_; // material of each analytic wall (spec_.walls order)
     // With more than one thread, pair results go to rows of `pair_result_` (force, torque on i,

@@ -113,5 +113,80 @@ TEST(NeighbourList, HistoryFollowsPairsThroughSortingAndRoleSwaps) {
     EXPECT_GT(swapped, 0U);
 }
 
+// A sorted store is searched as runs of cells (index ranges, eight partners at a time with
+// AVX-512): each row must hold exactly its higher partners, in increasing index order (the order of
+// the cell-by-cell search), and owners() must name the row of every entry. The dense cloud gives
+// rows longer than sixteen entries (owners are written sixteen at a time).
+TEST(NeighbourList, SortedRowsHoldTheirHigherPartnersInIncreasingOrder) {
+    for (const double skin : {0.3e-3, 3e-3}) {
+        ParticleStore p = random_cloud(2000, 0.02, 13);
+        NeighbourList nl(skin);
+        for (int build = 0; build < 2; ++build) {
+            nl.build(p, true);
+            EXPECT_EQ(listed(nl, p), brute_force(p, skin)) << "skin " << skin;
+            std::size_t longest = 0;
+            for (std::size_t i = 0; i < p.size(); ++i) {
+                const auto k0 = nl.offsets()[i];
+                const auto k1 = nl.offsets()[i + 1];
+                longest = std::max<std::size_t>(longest, k1 - k0);
+                for (auto k = k0; k < k1; ++k) {
+                    EXPECT_GT(nl.partners()[k], k == k0 ? i : nl.partners()[k - 1]);
+                    EXPECT_EQ(nl.owners()[k], i);
+                }
+            }
+            EXPECT_EQ(nl.owners().size(), nl.partners().size());
+            if (skin > 1e-3) {
+                EXPECT_GT(longest, 16U);
+            }
+            for (Vec3& x : p.x) {
+                x *= 1.01; // move every particle (another cell order at the second build)
+            }
+        }
+    }
+}
+
+// Only entries that hold a history are looked up at a rebuild; the others start at zero. Some
+// entries tagged, the particles moved (pairs leave and join the list), the store re-sorted.
+TEST(NeighbourList, SparseHistoriesAreCarriedAndOtherEntriesStartAtZero) {
+    ParticleStore p = random_cloud(1500, 0.025, 17);
+    NeighbourList nl(0.3e-3);
+    nl.build(p, false);
+    std::map<IdPair, Vec3> tag;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        for (auto k = nl.offsets()[i]; k < nl.offsets()[i + 1]; ++k) {
+            nl.shear()[k] = Vec3::Zero();
+            if (k % 3 == 0) {
+                const Vec3 v(static_cast<double>(p.id[i]) + 0.5, -1.0, static_cast<double>(k));
+                nl.shear()[k] = v;
+                tag[{p.id[i], p.id[nl.partners()[k]]}] = v;
+            }
+        }
+    }
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> u(-0.2e-3, 0.2e-3);
+    for (Vec3& x : p.x) {
+        x += Vec3(u(rng), u(rng), u(rng));
+    }
+    nl.build(p, true);
+    std::size_t carried = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        for (auto k = nl.offsets()[i]; k < nl.offsets()[i + 1]; ++k) {
+            const std::int64_t a = p.id[i];
+            const std::int64_t b = p.id[nl.partners()[k]];
+            if (const auto it = tag.find({a, b}); it != tag.end()) {
+                EXPECT_EQ(nl.shear()[k], it->second);
+                ++carried;
+            } else if (const auto jt = tag.find({b, a}); jt != tag.end()) {
+                EXPECT_EQ(nl.shear()[k], -jt->second);
+                ++carried;
+            } else {
+                EXPECT_EQ(nl.shear()[k], Vec3::Zero());
+            }
+        }
+    }
+    EXPECT_GT(carried, tag.size() / 2); // most tagged pairs are still within the cut-off
+    EXPECT_LT(carried, tag.size());     // and some left the list
+}
+
 } // namespace
 } // namespace kiln::contact

@@ -341,6 +341,56 @@ TEST(System, AdvanceGivesTheBitsOfAsManySteps) {
     }
 }
 
+// At a list build with sorting, only the wall histories of the last build's candidates are moved
+// to their particles' new places (the other particles hold none). Spheres sliding apart on a floor
+// and beside a side wall, each touching walls only: with and without sorting every sphere meets
+// the same contacts in the same order, so both runs must give the same bits, particle by particle.
+TEST(System, WallHistoriesFollowTheirParticlesThroughTheSort) {
+    SceneSpec s = base_scene();
+    s.skin = 0.2e-3; // a build every few steps
+    s.walls.push_back({"floor", PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
+    s.walls.push_back({"side", PlaneWall{Vec3(-0.0205, 0, 0), Vec3::UnitX()}, 0});
+    constexpr int n = 24;
+    for (int k = 0; k < n; ++k) {
+        // On a line along -x (the sort reverses it), fanning out in y: no two ever meet. The
+        // first sphere also presses on the side wall.
+        const double x = -0.0195 + 0.006 * (n - 1 - k) - (k == n - 1 ? 1e-5 : 0.0);
+        const double vy = 0.02 * (k - n / 2);
+        s.particles.push_back(
+            {0, 1e-3, Vec3(x, 0.0, 0.999e-3), Vec3(k == n - 1 ? -0.05 : 0.3, vy, 0), Vec3::Zero()});
+    }
+    SceneSpec unsorted = s;
+    unsorted.sort_particles = false;
+    System a(s);
+    System b(unsorted);
+    for (int step = 0; step < 3000; ++step) {
+        a.step();
+        b.step();
+    }
+    EXPECT_GT(a.neighbour_builds(), 100);
+    const SystemState sa = a.save_state();
+    const SystemState sb = b.save_state();
+    const std::size_t nw = s.walls.size();
+    std::size_t moved = 0;
+    std::size_t with_history = 0;
+    for (std::size_t i = 0; i < sa.particles.size(); ++i) {
+        const std::int64_t id = sa.particles.id[i];
+        ASSERT_EQ(sb.particles.id[static_cast<std::size_t>(id)], id); // b keeps insertion order
+        const std::size_t j = static_cast<std::size_t>(id);
+        moved += i != j ? 1 : 0;
+        // Tolerance: none (the same contacts in the same order).
+        EXPECT_EQ(sa.particles.x[i], sb.particles.x[j]);
+        EXPECT_EQ(sa.particles.v[i], sb.particles.v[j]);
+        EXPECT_EQ(sa.particles.omega[i], sb.particles.omega[j]);
+        for (std::size_t w = 0; w < nw; ++w) {
+            EXPECT_EQ(sa.wall_shear[i * nw + w], sb.wall_shear[j * nw + w]);
+            with_history += sa.wall_shear[i * nw + w] != Vec3::Zero() ? 1 : 0;
+        }
+    }
+    EXPECT_GT(moved, 0U);            // the sort did reorder
+    EXPECT_GT(with_history, n / 2U); // floor contacts carry a history
+}
+
 TEST(System, CollectContactsMatchesTheForceLoopAndLeavesTheMechanicsAlone) {
     System probe(threaded_pour(1));
     System plain(threaded_pour(1));
