@@ -17,6 +17,23 @@ namespace kiln::contact {
 namespace {
 constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
 
+/// Inside a parallel region: this thread's number and its contiguous share [first, last) of n
+/// items split in equal parts (the whole range without OpenMP).
+struct ThreadShare {
+    std::size_t thread = 0;
+    std::size_t first = 0;
+    std::size_t last = 0;
+};
+ThreadShare thread_share(std::size_t n) {
+    std::size_t t = 0;
+    std::size_t nt = 1;
+#ifdef _OPENMP
+    t = static_cast<std::size_t>(omp_get_thread_num());
+    nt = static_cast<std::size_t>(omp_get_num_threads());
+#endif
+    return {t, n * t / nt, n * (t + 1) / nt};
+}
+
 /// Appends to `out` the indices j of [j0, j1) with |x_j - xi|^2 < (ri + r_j)^2 (positions in m,
 /// world frame; ri already holds r_i + skin), in increasing order; returns how many. `out` must
 /// have room for j1 - j0 + 16 indices (the vector path stores whole registers). The squared
@@ -194,17 +211,10 @@ void NeighbourList::carry_histories(const ParticleStore& p,
     }
 #pragma omp parallel num_threads(threads_)
     {
-        int t = 0;
-        int nt = 1;
-#ifdef _OPENMP
-        t = omp_get_thread_num();
-        nt = omp_get_num_threads();
-#endif
-        const std::size_t k0 =
-            n_entries * static_cast<std::size_t>(t) / static_cast<std::size_t>(nt);
-        const std::size_t k1 =
-            n_entries * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(nt);
-        std::vector<std::uint32_t>& held = thread_held_[static_cast<std::size_t>(t)];
+        const ThreadShare share = thread_share(n_entries);
+        const std::size_t k0 = share.first;
+        const std::size_t k1 = share.last;
+        std::vector<std::uint32_t>& held = thread_held_[share.thread];
         held.resize(k1 - k0);
         std::size_t m = 0;
         for (std::size_t k = k0; k < k1; ++k) {
@@ -367,17 +377,10 @@ std::vector<std::uint32_t> NeighbourList::build(ParticleStore& p, bool sort) {
     std::fill(thread_count_.begin(), thread_count_.end(), std::size_t{0});
 #pragma omp parallel num_threads(threads_)
     {
-        int t = 0;
-        int nt = 1;
-#ifdef _OPENMP
-        t = omp_get_thread_num();
-        nt = omp_get_num_threads();
-#endif
-        const std::size_t i0 = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(nt);
-        const std::size_t i1 = n * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(nt);
-        std::vector<std::uint32_t>& buf = thread_partners_[static_cast<std::size_t>(t)];
-        thread_count_[static_cast<std::size_t>(t)] =
-            sort ? search_sorted(p, grid, i0, i1, buf) : search_unsorted(p, grid, i0, i1, buf);
+        const ThreadShare share = thread_share(n);
+        std::vector<std::uint32_t>& buf = thread_partners_[share.thread];
+        thread_count_[share.thread] = sort ? search_sorted(p, grid, share.first, share.last, buf)
+                                           : search_unsorted(p, grid, share.first, share.last, buf);
     }
     for (std::size_t i = 0; i < n; ++i) {
         offsets_[i + 1] += offsets_[i];
