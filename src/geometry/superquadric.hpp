@@ -30,7 +30,9 @@ struct Superquadric {
     [[nodiscard]] double inside_outside(const Vec3& p_body) const;
     /// Gradient of F at a body-frame point (1/m), body frame.
     [[nodiscard]] Vec3 gradient(const Vec3& p_body) const;
-    /// Hessian of F at a body-frame point (1/m^2), body frame.
+    /// Hessian of F at a body-frame point (1/m^2), body frame. Written with one pow per term as
+    /// the reference form: curvature_tensor() computes the same Hessian with shared powers for
+    /// speed, and Superquadric.CurvatureTensorSharesThePowers holds the two together.
     [[nodiscard]] Mat3 hessian(const Vec3& p_body) const;
     /// Outward unit normal at (or near) the surface point p (body frame).
     [[nodiscard]] Vec3 normal(const Vec3& p_body) const { return gradient(p_body).normalized(); }
