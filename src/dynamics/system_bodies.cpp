@@ -426,8 +426,10 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // R*): queued in a block of their own with the velocity of the contact point, the law
             // in vector lanes, forces and torques added in the order met. This block is flushed
             // before every flush of the sphere queue above, so every force is added in the order
-            // of the former one-contact route (a convex contact as soon as met, the pending
-            // sphere contacts at their flush) and the bits stay those of that route.
+            // of the one-contact route (`apply`: a convex contact as soon as met, the pending
+            // sphere contacts at their flush). The results equal that route's to round-off only:
+            // GCC contracts a * b + c into FMAs per call site (test
+            // Polyhedra.ConvexBlocksAgreeWithTheOneContactRoute; docs/performance.md, session 12).
             contact::ContactBlock<block> xb;
             std::uint32_t x_a[block], x_b[block], x_slot[block];
             bool x_new[block];
@@ -469,8 +471,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 x_queued = 0;
             };
             // Queues the touching contact ec of an element of a with an element of b (b < 0: a
-            // plane or cylinder wall, at rest with infinite mass); the same inputs of the law as
-            // `apply` computes (same expressions, so the same bits).
+            // plane or cylinder wall, at rest with infinite mass): the inputs of the law by the
+            // expressions of `apply` (world frame; lever arms from the centres of mass).
             const auto queue_convex = [&](std::uint32_t a, long b, const BodyContactKey& key,
                                           const ContactGroup& g, const ElementContact& ec,
                                           const BodyContact* old, int material_b, double ratio) {
