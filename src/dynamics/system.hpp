@@ -176,6 +176,11 @@ class System {
     /// Turns the separating-direction cache of convex pairs (and the portal search of superquadric
     /// near misses) on (the default) or off. The results are the same either way (tests, A/B).
     void use_separation_cache(bool on) { separation_cache_ = on; }
+    /// The law of contacts with a convex element (polyhedron, superquadric; pairs and plane or
+    /// cylinder walls) in blocks of vector lanes (on, the default) or one contact at a time (off,
+    /// the route before session 12, for tests and A/B). Same contacts and order; the forces agree
+    /// to round-off (GCC contracts a * b + c differently in the two routes).
+    void use_convex_blocks(bool on) { convex_blocks_ = on; }
     /// Convex pair queries that a cached or searched separating direction answered (no narrow
     /// phase), since construction or restart (not saved in checkpoints).
     [[nodiscard]] long separation_skips() const { return separation_skips_; }
@@ -270,6 +275,7 @@ class System {
     // `separating`). The answers do not depend on it, only the work does.
     std::vector<Vec3> sep_dirs_;
     bool separation_cache_ = true;
+    bool convex_blocks_ = true; // see use_convex_blocks
     long separation_skips_ = 0;
     // Compact histories, parallel to member_pairs_ (docs/architecture.md, "Contact records"): the
     // key of each member pair (ids, element indices in each particle; -1 for a general item), set

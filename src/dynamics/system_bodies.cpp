@@ -421,7 +421,103 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 cb.lever_i[q] = 0.0; // v is already the velocity of the contact point
                 cb.lever_j[q] = 0.0;
             }
+            // Contacts of a convex element (polyhedron, superquadric) with another element or a
+            // plane or cylinder wall, geometry known from the narrow phase (normal, overlap, point,
+            // R*): queued in a block of their own with the velocity of the contact point, the law
+            // in vector lanes, forces and torques added in the order met. This block is flushed
+            // before every flush of the sphere queue above, so every force is added in the order
+            // of the one-contact route (`apply`: a convex contact as soon as met, the pending
+            // sphere contacts at their flush). The results equal that route's to round-off only:
+            // GCC contracts a * b + c into FMAs per call site (test
+            // Polyhedra.ConvexBlocksAgreeWithTheOneContactRoute; docs/performance.md, session 12).
+            contact::ContactBlock<block> xb;
+            std::uint32_t x_a[block], x_b[block], x_slot[block];
+            bool x_new[block];
+            double x_ra[3][block], x_rb[3][block], x_ratio[block];
+            std::size_t x_queued = 0;
+            for (std::size_t q = 0; q < block; ++q) {
+                xb.lever_i[q] = 0.0;
+                xb.lever_j[q] = 0.0;
+            }
+            const auto flush_convex = [&] {
+#pragma omp simd
+                for (std::size_t q = 0; q < x_queued; ++q) {
+                    contact::evaluate_block(law, fn_floor, rolling, xb, q, dt);
+                }
+                for (std::size_t q = 0; q < x_queued; ++q) {
+                    const std::uint32_t a = x_a[q];
+                    const std::uint32_t b = x_b[q];
+                    const Vec3 f(xb.f[0][q], xb.f[1][q], xb.f[2][q]);
+                    const Vec3 ra(x_ra[0][q], x_ra[1][q], x_ra[2][q]);
+                    p_.force[a] += f;
+                    p_.torque[a] += ra.cross(f) + Vec3(xb.ti[0][q], xb.ti[1][q], xb.ti[2][q]);
+                    if (b != no_element) { // a wall takes no reaction
+                        const Vec3 rb(x_rb[0][q], x_rb[1][q], x_rb[2][q]);
+                        p_.force[b] -= f;
+                        p_.torque[b] += Vec3(xb.tj[0][q], xb.tj[1][q], xb.tj[2][q]) - rb.cross(f);
+                    }
+                    BodyContactEntry& entry = next_contacts_[x_slot[q]];
+                    entry.contact.shear = Vec3(xb.s[0][q], xb.s[1][q], xb.s[2][q]);
+                    entry.contact.force = f;
+                    if (record_body_onsets_ && x_new[q]) { // heat: impact onset (system.cpp)
+                        note_body_onset(entry.key, entry.contact.normal, entry.contact.point,
+                                        Vec3(xb.v[0][q], xb.v[1][q], xb.v[2][q]), xb.m_eff[q],
+                                        entry.contact.r_eff);
+                    }
+                    queue_totals->energy += xb.energy[q];
+                    queue_totals->max_ratio = std::max(queue_totals->max_ratio, x_ratio[q]);
+                    ++queue_totals->contacts;
+                }
+                x_queued = 0;
+            };
+            // Queues the touching contact ec of an element of a with an element of b (b < 0: a
+            // plane or cylinder wall, at rest with infinite mass): the inputs of the law by the
+            // expressions of `apply` (world frame; lever arms from the centres of mass).
+            const auto queue_convex = [&](std::uint32_t a, long b, const BodyContactKey& key,
+                                          const ContactGroup& g, const ElementContact& ec,
+                                          const BodyContact* old, int material_b, double ratio) {
+                const Vec3 ra = ec.point - p_.x[a];
+                Vec3 v_rel = p_.v[a] + p_.omega[a].cross(ra);
+                double m_eff = p_.mass[a];
+                Vec3 rb = Vec3::Zero();
+                Vec3 wb = Vec3::Zero();
+                if (b >= 0) {
+                    const auto j = static_cast<std::uint32_t>(b);
+                    rb = ec.point - p_.x[j];
+                    v_rel -= p_.v[j] + p_.omega[j].cross(rb);
+                    m_eff = p_.mass[a] * p_.mass[j] / (p_.mass[a] + p_.mass[j]);
+                    wb = p_.omega[j];
+                }
+                const double r_eff =
+                    first_touch && old != nullptr && old->r_eff > 0.0 ? old->r_eff : ec.r_eff;
+                const std::size_t q = x_queued;
+                for (int c = 0; c < 3; ++c) {
+                    xb.n[c][q] = ec.normal[c];
+                    xb.v[c][q] = v_rel[c];
+                    xb.wi[c][q] = p_.omega[a][c];
+                    xb.wj[c][q] = wb[c];
+                    xb.s[c][q] = old != nullptr ? old->shear[c] : 0.0;
+                    x_ra[c][q] = ra[c];
+                    x_rb[c][q] = rb[c];
+                }
+                xb.overlap[q] = ec.overlap;
+                xb.r_eff[q] = r_eff;
+                xb.m_eff[q] = m_eff;
+                xb.set_pair(q, pairs_.at(p_.material[a], material_b));
+                x_a[q] = a;
+                x_b[q] = b >= 0 ? static_cast<std::uint32_t>(b) : no_element;
+                x_new[q] = old == nullptr;
+                x_ratio[q] = ratio;
+                x_slot[q] = record(
+                    key, g,
+                    BodyContact{Vec3::Zero(), ec.normal, ec.point, ec.overlap, r_eff, Vec3::Zero()},
+                    old);
+                if (++x_queued == block) {
+                    flush_convex();
+                }
+            };
             const auto flush = [&] {
+                flush_convex(); // contacts met before the pending sphere contacts go first
                 if (raw_pairs) {
 #pragma omp simd
                     for (std::size_t q = 0; q < queued; ++q) {
@@ -674,7 +770,10 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         separation_skips_ += ec.proved_apart ? 1 : 0;
                         np_.fallbacks += ec.fell_back ? 1 : 0;
                         np_.failures += ec.converged ? 0 : 1;
-                        if (ec.touching) {
+                        if (ec.touching && convex_blocks_) {
+                            queue_convex(a, b, key, g, ec, old, p_.material[b],
+                                         ec.overlap / ratio_size(A, &B));
+                        } else if (ec.touching) {
                             apply(a, b, key, g, ec, old, p_.material[b],
                                   ec.overlap / ratio_size(A, &B), pair_totals);
                         }
@@ -803,8 +902,14 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         if (!ec.touching) {
                             continue;
                         }
-                        apply(a, -1, key, g, ec, find_old(g, key.eb), spec_.walls[w].material,
-                              ec.overlap / ratio_size(A, nullptr), wall_totals);
+                        if (convex_blocks_) {
+                            queue_convex(a, -1, key, g, ec, find_old(g, key.eb),
+                                         spec_.walls[w].material,
+                                         ec.overlap / ratio_size(A, nullptr));
+                        } else {
+                            apply(a, -1, key, g, ec, find_old(g, key.eb), spec_.walls[w].material,
+                                  ec.overlap / ratio_size(A, nullptr), wall_totals);
+                        }
                     }
                 }
             }
