@@ -120,6 +120,24 @@ using PatchTest = std::function<bool(const PolyhedronContact&)>;
 [[nodiscard]] PolyhedronContact
 polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b, const PatchTest& need_patch);
 
+namespace detail {
+/// How the common plane's face stages scan (the answer is the same bits either way).
+enum class FaceScan {
+    automatic, ///< by the size of the distance table: bounded from kBoundedTableEntries on
+    full,      ///< every vertex against every face plane, the prune from the full tables
+    bounded,   ///< only the faces whose upper bound can be the largest; the rest on demand
+};
+/// Size of the vertex-face distance table of a pair (n_faces_a n_vertices_b + n_faces_b
+/// n_vertices_a) from which the automatic scan is bounded. Measured (docs/performance.md,
+/// session 12): the bounded scan pays for `cylinder_16` pairs (1152 entries), breaks even for
+/// icosahedra (480) and costs for cubes (96).
+inline constexpr std::size_t kBoundedTableEntries = 600;
+/// polyhedron_contact (without a patch test) with the face stages chosen: for tests.
+[[nodiscard]] PolyhedronContact polyhedron_contact_with(const PosedPolyhedron& a,
+                                                        const PosedPolyhedron& b, FaceScan scan,
+                                                        bool with_patch = true);
+} // namespace detail
+
 /// Points and patch for a given normal m (unit, from B to A, world frame), as polyhedron_contact
 /// computes them after finding its plane; fills depth (h_A(-m) + h_B(m)), normal, point, points,
 /// patch and patch_area. Gives a patch to a normal found otherwise (e.g. by EPA).
