@@ -7,6 +7,7 @@
 #include "geometry/separating_axis.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -14,6 +15,7 @@
 #include <numbers>
 #include <numeric>
 #include <optional>
+#include <utility>
 
 namespace kiln::geometry {
 Vec3 PolyhedronFeatures::support(const Vec3& d_body) const {
@@ -243,18 +245,33 @@ class PlaneDistances {
     /// filled columns first, then the two rows.
     bool both_beyond(std::size_t i0, std::size_t i1) {
         const double reach = reach_;
-        const double* d0 = t_.dist.data() + i0 * nf_;
-        const double* d1 = t_.dist.data() + i1 * nf_;
         for (const std::size_t k : t_.cols) {
-            if (d0[k] > reach && d1[k] > reach) {
+            if (t_.dist[i0 * nf_ + k] > reach && t_.dist[i1 * nf_ + k] > reach) {
                 return true;
             }
         }
-        fill_row(i0);
-        fill_row(i1);
-        if (nf_ <= 64) {
-            return (t_.beyond[i0] & t_.beyond[i1]) != 0;
+        if (t_.row_done[i1] != 0 && t_.row_done[i0] == 0) {
+            std::swap(i0, i1); // start from a row already filled
         }
+        fill_row(i0);
+        if (nf_ <= 64) {
+            if (t_.row_done[i1] != 0) {
+                return (t_.beyond[i0] & t_.beyond[i1]) != 0;
+            }
+            // The other end only against the planes the first lies beyond (often none: an
+            // end inside the other body keeps the edge without the second row).
+            const Vec3 x = v_[i1];
+            for (std::uint64_t m = t_.beyond[i0]; m != 0; m &= m - 1) {
+                const auto k = static_cast<std::size_t>(std::countr_zero(m));
+                if (n_[k].dot(x) - o_[k] > reach) {
+                    return true;
+                }
+            }
+            return false;
+        }
+        fill_row(i1);
+        const double* d0 = t_.dist.data() + i0 * nf_;
+        const double* d1 = t_.dist.data() + i1 * nf_;
         for (std::size_t k = 0; k < nf_; ++k) {
             if (d0[k] > reach && d1[k] > reach) {
                 return true;
@@ -263,7 +280,8 @@ class PlaneDistances {
         return false;
     }
     /// Does a vertex lie strictly inside the other body (all its distances negative)? A filled
-    /// column with a distance >= 0 answers no for that vertex without its row.
+    /// column with a distance >= 0 answers no for that vertex without its row; a vertex without
+    /// a row stops at its first distance >= 0.
     bool any_inside() {
         for (std::size_t i = 0; i < v_.size(); ++i) {
             bool out = false;
@@ -273,13 +291,19 @@ class PlaneDistances {
             if (out) {
                 continue;
             }
-            fill_row(i);
-            const double* d = t_.dist.data() + i * nf_;
-            double top = -std::numeric_limits<double>::infinity();
-            for (std::size_t k = 0; k < nf_; ++k) {
-                top = std::max(top, d[k]);
+            std::size_t k = 0;
+            if (t_.row_done[i] != 0) {
+                const double* d = t_.dist.data() + i * nf_;
+                while (k < nf_ && !(d[k] >= 0.0)) {
+                    ++k;
+                }
+            } else {
+                const Vec3 x = v_[i];
+                while (k < nf_ && !(n_[k].dot(x) - o_[k] >= 0.0)) {
+                    ++k;
+                }
             }
-            if (top < 0.0) {
+            if (k == nf_) {
                 return true;
             }
         }
