@@ -27,6 +27,11 @@ namespace {
 /// Largest angle (rad) between the normals of two adjacent triangles counted as one plane.
 constexpr double kCoplanarAngle = 1e-9;
 
+/// Size of a pair's vertex-face distance table (n_faces_a n_vertices_b + n_faces_b n_vertices_a)
+/// below which the common plane keeps the full tables (a cube pair's 96 entries: the bounded
+/// scan's bookkeeping cost 2-7 %, docs/performance.md, session 12).
+constexpr std::size_t kBoundedTableEntries = 200;
+
 int find_root(std::vector<int>& parent, int i) {
     while (parent[static_cast<std::size_t>(i)] != i) {
         parent[static_cast<std::size_t>(i)] =
@@ -714,14 +719,19 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
     const std::size_t nfb = fb.face_normals.size();
     thread_local std::vector<double> sep;
     thread_local std::vector<double> bound;
-    // Small bodies take the full tables of distances (every vertex against every face plane:
-    // vertex by vertex, with the inside-vertex certificates in the same pass); large ones scan
-    // only the faces that can be the largest and read the rest of the table where the prune and
-    // the certificates need it (PlaneDistances). Same answer, bit for bit.
-    const std::size_t entries = nfa * r.vb.size() + nfb * fa.vertices.size();
-    const bool bounded =
-        scan == detail::FaceScan::bounded ||
-        (scan == detail::FaceScan::automatic && entries >= detail::kBoundedTableEntries);
+    // The bounded scan (only the faces that can be the largest; the rest of the table of
+    // distances where the prune and the certificates read it, PlaneDistances) pays where a face
+    // plane's scan is long and a vertex's row short: bodies with more vertices than faces, in a
+    // table too large for the bookkeeping to vanish in (measured, docs/performance.md,
+    // "Polyhedron search with temporal coherence (session 12)": 1.3x for `cylinder_16` pairs,
+    // 1.05x for `cylinder_8`; icosahedra, 12 vertices and 20 faces, and cubes, a table of 96, do
+    // not gain). Others take the full tables: every vertex against every face plane, vertex by
+    // vertex, the inside-vertex certificates in the same pass. Same answer, bit for bit.
+    const std::size_t nva = fa.vertices.size();
+    const std::size_t nvb = r.vb.size();
+    const bool bounded = scan == detail::FaceScan::bounded ||
+                         (scan == detail::FaceScan::automatic && nva + nvb > nfa + nfb &&
+                          nfa * nvb + nfb * nva >= kBoundedTableEntries);
     // Upper bounds of the face separations (m), so that a face that cannot be the largest is not
     // scanned: the smallest distance of B's vertices beyond A's face plane k is at most the
     // distance of any point of B's hull, e.g. of c_B - rho_B n_k with c_B B's centre and rho_B

@@ -123,16 +123,10 @@ polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b, const Pat
 namespace detail {
 /// How the common plane's face stages scan (the answer is the same bits either way).
 enum class FaceScan {
-    automatic, ///< by the size of the distance table: bounded from kBoundedTableEntries on
+    automatic, ///< bounded for bodies with more vertices than faces (polyhedron_contact.cpp)
     full,      ///< every vertex against every face plane, the prune from the full tables
     bounded,   ///< only the faces whose upper bound can be the largest; the rest on demand
 };
-/// Size of the vertex-face distance table of a pair (n_faces_a n_vertices_b + n_faces_b
-/// n_vertices_a) from which the automatic scan is bounded. Measured (docs/performance.md,
-/// "Polyhedron search with temporal coherence (session 12)"): the bounded scan is 1.3x faster
-/// for `cylinder_16` pairs (1152 entries), even to 4 % faster for icosahedra (480) and 2-7 %
-/// slower for cubes (96), whose full table is too small for the bookkeeping to pay.
-inline constexpr std::size_t kBoundedTableEntries = 200;
 /// polyhedron_contact (without a patch test) with the face stages chosen: for tests.
 [[nodiscard]] PolyhedronContact polyhedron_contact_with(const PosedPolyhedron& a,
                                                         const PosedPolyhedron& b, FaceScan scan,
