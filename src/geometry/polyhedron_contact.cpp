@@ -7,15 +7,17 @@
 #include "geometry/separating_axis.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <map>
 #include <numbers>
 #include <numeric>
+#include <optional>
+#include <utility>
 
 namespace kiln::geometry {
-
 Vec3 PolyhedronFeatures::support(const Vec3& d_body) const {
     return farthest_vertex(vertices, d_body);
 }
@@ -24,6 +26,11 @@ namespace {
 
 /// Largest angle (rad) between the normals of two adjacent triangles counted as one plane.
 constexpr double kCoplanarAngle = 1e-9;
+
+/// Size of a pair's vertex-face distance table (n_faces_a n_vertices_b + n_faces_b n_vertices_a)
+/// below which the common plane keeps the full tables (a cube pair's 96 entries: the bounded
+/// scan's bookkeeping cost 2-7 %, docs/performance.md, session 12).
+constexpr std::size_t kBoundedTableEntries = 200;
 
 int find_root(std::vector<int>& parent, int i) {
     while (parent[static_cast<std::size_t>(i)] != i) {
@@ -119,6 +126,15 @@ using detail::hull_2d;
 using detail::section;
 using detail::Vec2;
 
+/// Storage of PlaneDistances, kept between queries (per thread) to reuse its memory.
+struct DistanceTable {
+    std::vector<double> dist;            // vertex-major distances (m)
+    std::vector<unsigned char> row_done; // per vertex: its row is filled
+    std::vector<unsigned char> col_done; // per face: its column is filled
+    std::vector<std::uint64_t> beyond;   // per vertex with a row: bit k set when dist > reach
+    std::vector<std::size_t> cols;       // the filled columns, in the order filled
+};
+
 /// B expressed in A's body frame: vertices and face planes.
 struct Relative {
     Mat3 rot;               // B body -> A body
@@ -131,8 +147,9 @@ struct Relative {
     std::vector<std::array<Vec3, 3>> arcs;
     // Signed distances of the vertices of one body beyond the face planes of the other,
     // vertex-major: dist_b[j * nfa + k] = n_a,k . vb_j - o_a,k and dist_a[i * nfb + k] =
-    // n_b,k . va_i - o_b,k (m), filled by the face stages and used to prune the edge stage.
-    std::vector<double> dist_b, dist_a;
+    // n_b,k . va_i - o_b,k (m), filled by columns (a face's separation) and rows (a vertex's
+    // distances, for the prune and the certificates) where they are first read.
+    DistanceTable dist_b, dist_a;
     std::vector<int> edges_a, edges_b; // feature edges kept for the edge-edge stage
     bool pruned = false;               // edges_a/edges_b are valid for this pose
 };
@@ -190,14 +207,175 @@ double segment_point_distance2(const Vec3& p0, const Vec3& p1, const Vec3& c) {
     return (p0 + t * d - c).squaredNorm();
 }
 
-/// Edges of a body (vertices `v`; their distances beyond the other body's nf face planes in
-/// `dist`, vertex-major) that pass within `reach` of the other body, to the test's precision:
-/// dropped are edges farther than `reach` from the other body's bounding sphere (centre `centre`,
-/// radius `radius`) and edges whose two ends lie beyond one face plane by more than `reach`.
-/// Their indices go to `kept`, in order.
-void keep_edges(const std::vector<std::array<int, 4>>& edges, const std::vector<Vec3>& v,
-                const std::vector<double>& dist, std::size_t nf, double reach, const Vec3& centre,
-                double radius, std::vector<int>& kept) {
+/// Signed distances (m) of the vertices `v` of one body beyond the face planes (n, o) of the
+/// other, vertex-major (entry i * nf + k = n_k . v_i - o_k), filled by whole columns (one face
+/// against every vertex: its separation) or whole rows (one vertex against every face: the prune
+/// and the certificates) where first read. An entry may be computed in both; it is the one
+/// expression `n_k . v_i - o_k` either way, so the numbers do not depend on which are read.
+class PlaneDistances {
+  public:
+    PlaneDistances(const std::vector<Vec3>& n, const std::vector<double>& o,
+                   const std::vector<Vec3>& v, DistanceTable& t)
+        : n_(n), o_(o), v_(v), t_(t), nf_(n.size()) {
+        t_.dist.resize(nf_ * v.size());
+        t_.row_done.assign(v.size(), 0);
+        t_.col_done.assign(nf_, 0);
+        t_.beyond.resize(v.size());
+        t_.cols.clear();
+    }
+    /// Separation (m) along face k: the smallest distance of the vertices beyond its plane.
+    double separation(std::size_t k) {
+        const Vec3 n = n_[k];
+        const double o = o_[k];
+        const Vec3* v = v_.data();
+        const std::size_t nv = v_.size();
+        const std::size_t nf = nf_;
+        double* col = t_.dist.data() + k;
+        double s = std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; i < nv; ++i) {
+            const double d = n.dot(v[i]) - o;
+            col[i * nf] = d;
+            s = std::min(s, d);
+        }
+        if (t_.col_done[k] == 0) {
+            t_.col_done[k] = 1;
+            t_.cols.push_back(k);
+        }
+        return s;
+    }
+    /// The prune's distance (m): the masks of the rows mark the planes a vertex lies beyond by
+    /// more than `reach`. Set before the first row.
+    void set_reach(double reach) { reach_ = reach; }
+    /// Do both vertices i0 and i1 lie beyond one face plane by more than the reach? Reads the
+    /// filled columns first, then the two rows.
+    bool both_beyond(std::size_t i0, std::size_t i1) {
+        const double reach = reach_;
+        for (const std::size_t k : t_.cols) {
+            if (t_.dist[i0 * nf_ + k] > reach && t_.dist[i1 * nf_ + k] > reach) {
+                return true;
+            }
+        }
+        if (t_.row_done[i1] != 0 && t_.row_done[i0] == 0) {
+            std::swap(i0, i1); // start from a row already filled
+        }
+        fill_row(i0);
+        if (nf_ <= 64) {
+            if (t_.row_done[i1] != 0) {
+                return (t_.beyond[i0] & t_.beyond[i1]) != 0;
+            }
+            // The other end only against the planes the first lies beyond (often none: an
+            // end inside the other body keeps the edge without the second row).
+            const Vec3 x = v_[i1];
+            for (std::uint64_t m = t_.beyond[i0]; m != 0; m &= m - 1) {
+                const auto k = static_cast<std::size_t>(std::countr_zero(m));
+                if (n_[k].dot(x) - o_[k] > reach) {
+                    return true;
+                }
+            }
+            return false;
+        }
+        fill_row(i1);
+        const double* d0 = t_.dist.data() + i0 * nf_;
+        const double* d1 = t_.dist.data() + i1 * nf_;
+        for (std::size_t k = 0; k < nf_; ++k) {
+            if (d0[k] > reach && d1[k] > reach) {
+                return true;
+            }
+        }
+        return false;
+    }
+    /// Does a vertex lie strictly inside the other body (all its distances negative)? A filled
+    /// column with a distance >= 0 answers no for that vertex without its row; a vertex without
+    /// a row stops at its first distance >= 0.
+    bool any_inside() {
+        for (std::size_t i = 0; i < v_.size(); ++i) {
+            bool out = false;
+            for (const std::size_t k : t_.cols) {
+                out = out || t_.dist[i * nf_ + k] >= 0.0;
+            }
+            if (out) {
+                continue;
+            }
+            std::size_t k = 0;
+            if (t_.row_done[i] != 0) {
+                const double* d = t_.dist.data() + i * nf_;
+                while (k < nf_ && !(d[k] >= 0.0)) {
+                    ++k;
+                }
+            } else {
+                const Vec3 x = v_[i];
+                while (k < nf_ && !(n_[k].dot(x) - o_[k] >= 0.0)) {
+                    ++k;
+                }
+            }
+            if (k == nf_) {
+                return true;
+            }
+        }
+        return false;
+    }
+    [[nodiscard]] const std::vector<Vec3>& vertices() const { return v_; }
+    [[nodiscard]] std::size_t faces() const { return nf_; }
+
+  private:
+    void fill_row(std::size_t i) {
+        if (t_.row_done[i] != 0) {
+            return;
+        }
+        t_.row_done[i] = 1;
+        // Locals, so that the stores into the row (doubles) cannot alias them for the compiler.
+        const Vec3* n = n_.data();
+        const double* o = o_.data();
+        const Vec3 x = v_[i];
+        const double reach = reach_;
+        const std::size_t nf = nf_;
+        double* row = t_.dist.data() + i * nf;
+        std::uint64_t mask = 0;
+        for (std::size_t k = 0; k < nf; ++k) {
+            const double d = n[k].dot(x) - o[k];
+            row[k] = d;
+            mask |= static_cast<std::uint64_t>(d > reach) << (k & 63U);
+        }
+        t_.beyond[i] = mask;
+    }
+
+    const std::vector<Vec3>& n_;
+    const std::vector<double>& o_;
+    const std::vector<Vec3>& v_;
+    DistanceTable& t_;
+    std::size_t nf_;
+    double reach_ = std::numeric_limits<double>::infinity();
+};
+
+/// Edges of a body (vertices and distances beyond the other body's face planes in `t`, its
+/// reach set) that pass within the reach of the other body, to the test's precision: dropped are
+/// edges whose two ends lie beyond one face plane by more than the reach and edges farther than
+/// `reach` from the other body's bounding sphere (centre `centre`, radius `radius`). Their
+/// indices go to `kept`, in order. The filled columns (the face stages' planes, the deepest
+/// among them) drop most edges far from the contact, so only the others read their ends' rows.
+void keep_edges(const std::vector<std::array<int, 4>>& edges, PlaneDistances& t, double reach,
+                const Vec3& centre, double radius, std::vector<int>& kept) {
+    kept.clear();
+    const double far2 = (radius + reach) * (radius + reach);
+    const std::vector<Vec3>& v = t.vertices();
+    t.set_reach(reach);
+    for (std::size_t e = 0; e < edges.size(); ++e) {
+        const auto i0 = static_cast<std::size_t>(edges[e][0]);
+        const auto i1 = static_cast<std::size_t>(edges[e][1]);
+        if (!t.both_beyond(i0, i1) && segment_point_distance2(v[i0], v[i1], centre) <= far2) {
+            kept.push_back(static_cast<int>(e));
+        }
+    }
+}
+
+/// keep_edges from the full tables (the path for small bodies): edges of a body (vertices `v`;
+/// their distances beyond the other body's nf face planes in `dist`, vertex-major) that pass within
+/// `reach` of the other body, to the test's precision: dropped are edges farther than `reach` from
+/// the other body's bounding sphere (centre `centre`, radius `radius`) and edges whose two ends lie
+/// beyond one face plane by more than `reach`. Their indices go to `kept`, in order.
+void keep_edges_by_masks(const std::vector<std::array<int, 4>>& edges, const std::vector<Vec3>& v,
+                         const std::vector<double>& dist, std::size_t nf, double reach,
+                         const Vec3& centre, double radius, std::vector<int>& kept) {
     kept.clear();
     const double far2 = (radius + reach) * (radius + reach);
     if (nf <= 64) {
@@ -425,6 +603,36 @@ void edge_stage(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, cons
     }
 }
 
+/// Separations (m) along the face planes of `t`'s other body that can be the largest, as the
+/// full face stage gives them (the smallest distance of the vertices beyond each plane): sep[k]
+/// is computed for every face whose upper bound `bound[k]` (m) is not below the largest
+/// separation found so far (or `floor`, a value the search's answer reaches anyway), and is
+/// -infinity for the others, which therefore cannot be the largest nor tie it. The face of the
+/// largest bound goes first, so that the others meet a high bar. With `bound` empty every face is
+/// computed.
+void face_separations(PlaneDistances& t, const std::vector<double>& bound, double floor,
+                      std::vector<double>& sep) {
+    const std::size_t nf = t.faces();
+    if (bound.empty()) {
+        sep.resize(nf);
+        for (std::size_t k = 0; k < nf; ++k) {
+            sep[k] = t.separation(k);
+        }
+        return;
+    }
+    sep.assign(nf, -std::numeric_limits<double>::infinity());
+    const auto first =
+        static_cast<std::size_t>(std::max_element(bound.begin(), bound.end()) - bound.begin());
+    sep[first] = t.separation(first);
+    double bar = std::max(floor, sep[first]);
+    for (std::size_t k = 0; k < nf; ++k) {
+        if (k != first && !(bound[k] < bar)) {
+            sep[k] = t.separation(k);
+            bar = std::max(bar, sep[k]);
+        }
+    }
+}
+
 /// Signed distances (m) of the vertices `v` beyond the face planes (n, o) of the other body,
 /// vertex-major: dist[i * nf + k] = n_k . v_i - o_k; sep[k] = the smallest over the vertices (the
 /// separation along face k). Returns whether a vertex lies strictly inside the other body (all its
@@ -485,8 +693,9 @@ bool edge_crosses(const std::vector<std::array<int, 4>>& edges, const std::vecto
 namespace {
 
 /// The fast common plane; the patch as `with_patch` says, or (with `need_patch`) as it decides.
+/// `scan`: which face stages (see detail::FaceScan).
 PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& b, bool with_patch,
-                               const PatchTest* need_patch) {
+                               const PatchTest* need_patch, detail::FaceScan scan) {
     PolyhedronContact c;
     const PolyhedronFeatures& fa = *a.shape;
     const PolyhedronFeatures& fb = *b.shape;
@@ -509,7 +718,42 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
     const std::size_t nfa = fa.face_normals.size();
     const std::size_t nfb = fb.face_normals.size();
     thread_local std::vector<double> sep;
-    const bool b_in_a = face_distances(fa.face_normals, fa.face_offsets, r.vb, r.dist_b, sep);
+    thread_local std::vector<double> bound;
+    // The bounded scan (only the faces that can be the largest; the rest of the table of
+    // distances where the prune and the certificates read it, PlaneDistances) pays where a face
+    // plane's scan is long and a vertex's row short: bodies with more vertices than faces, in a
+    // table too large for the bookkeeping to vanish in (measured, docs/performance.md,
+    // "Polyhedron search with bounded face stages (session 12)": 1.3x for `cylinder_16` pairs,
+    // 1.05x for `cylinder_8`; icosahedra, 12 vertices and 20 faces, and cubes, a table of 96, do
+    // not gain). Others take the full tables: every vertex against every face plane, vertex by
+    // vertex, the inside-vertex certificates in the same pass. Same answer, bit for bit.
+    const std::size_t nva = fa.vertices.size();
+    const std::size_t nvb = r.vb.size();
+    const bool bounded = scan == detail::FaceScan::bounded ||
+                         (scan == detail::FaceScan::automatic && nva + nvb > nfa + nfb &&
+                          nfa * nvb + nfb * nva >= kBoundedTableEntries);
+    // Upper bounds of the face separations (m), so that a face that cannot be the largest is not
+    // scanned: the smallest distance of B's vertices beyond A's face plane k is at most the
+    // distance of any point of B's hull, e.g. of c_B - rho_B n_k with c_B B's centre and rho_B
+    // its inscribed radius (the ball of radius rho_B about the centre lies inside every face
+    // plane): n_k . c_B - o_k - rho_B; for B's face k (in A's frame) and A's vertices,
+    // -o_k - rho_A. Slack against round-off and the merged faces: their normals are within 1e-9
+    // rad of the triangles' (polyhedron_features), so the offsets within 1e-9 of the radius of
+    // the triangles' planes; 1e-8 of the sum of the radii covers both.
+    const double slack = 1e-8 * (fa.radius + fb.radius);
+    std::optional<PlaneDistances> tb; // B's vertices beyond A's planes (bounded)
+    bool b_in_a = false;              // certificates of the full tables
+    bool a_in_b = false;
+    if (bounded) {
+        tb.emplace(fa.face_normals, fa.face_offsets, r.vb, r.dist_b);
+        bound.resize(nfa);
+        for (std::size_t k = 0; k < nfa; ++k) {
+            bound[k] = fa.face_normals[k].dot(r.shift) - fa.face_offsets[k] - fb.inradius + slack;
+        }
+        face_separations(*tb, bound, -std::numeric_limits<double>::infinity(), sep);
+    } else {
+        b_in_a = face_distances(fa.face_normals, fa.face_offsets, r.vb, r.dist_b.dist, sep);
+    }
     for (std::size_t k = 0; k < nfa; ++k) {
         ++c.iterations;
         if (sep[k] > best) {
@@ -518,10 +762,25 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
             c.feature = CommonPlaneFeature::kFaceOfA;
         }
     }
-    bool a_in_b = false;
+    std::optional<PlaneDistances> ta; // A's vertices beyond B's planes (bounded)
     if (best <= 0.0) {
         relative_faces(fb, r);
-        a_in_b = face_distances(r.nb, r.ob, fa.vertices, r.dist_a, sep);
+        if (bounded) {
+            ta.emplace(r.nb, r.ob, fa.vertices, r.dist_a);
+            bound.resize(nfb);
+            for (std::size_t k = 0; k < nfb; ++k) {
+                bound[k] = -r.ob[k] - fa.inradius + slack;
+            }
+            face_separations(*ta, bound, best, sep);
+            if (*std::max_element(sep.begin(), sep.end()) > 0.0) {
+                // A gap: the loop below stops at the first separating face in order, which a
+                // skipped face may be, so every face's separation is needed.
+                bound.clear();
+                face_separations(*ta, bound, best, sep);
+            }
+        } else {
+            a_in_b = face_distances(r.nb, r.ob, fa.vertices, r.dist_a.dist, sep);
+        }
         // The faces in order up to the first that separates (a gap ends the search).
         for (std::size_t k = 0; k < nfb && best <= 0.0; ++k) {
             ++c.iterations;
@@ -541,8 +800,15 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
         // is farther than D from that body and cannot carry the optimum, so it is dropped
         // (slack: 1e-9 of the size against round-off).
         const double reach = -best + 1e-9 * (fa.radius + fb.radius);
-        keep_edges(fa.edges, fa.vertices, r.dist_a, nfb, reach, r.shift, fb.radius, r.edges_a);
-        keep_edges(fb.edges, r.vb, r.dist_b, nfa, reach, Vec3::Zero(), fa.radius, r.edges_b);
+        if (bounded) {
+            keep_edges(fa.edges, *ta, reach, r.shift, fb.radius, r.edges_a);
+            keep_edges(fb.edges, *tb, reach, Vec3::Zero(), fa.radius, r.edges_b);
+        } else {
+            keep_edges_by_masks(fa.edges, fa.vertices, r.dist_a.dist, nfb, reach, r.shift,
+                                fb.radius, r.edges_a);
+            keep_edges_by_masks(fb.edges, r.vb, r.dist_b.dist, nfa, reach, Vec3::Zero(), fa.radius,
+                                r.edges_b);
+        }
         r.pruned = true;
         relative_arcs(fb, r);
         edge_stage(fa, fb, r, best, best_m, c);
@@ -550,13 +816,17 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
         // edge pair may lie farther apart than D and be dropped, and the search would report a
         // contact that is not there (found by a random-pose test against
         // find_separating_direction). So a "touching" answer of a pruned search is kept only
-        // with a certificate of overlap: a vertex of one body inside the other (the face stages'
-        // distances) or a kept edge crossing the other body. Otherwise a separating direction is
+        // with a certificate of overlap: a vertex of one body inside the other (the distances
+        // beyond the face planes, computed here where not yet) or a kept edge crossing the other
+        // body. Otherwise a separating direction is
         // searched, and without one the edge stage runs again over every edge pair (the search
         // before the prune, exact in both cases).
         const bool pruned_some =
             r.edges_a.size() < fa.edges.size() || r.edges_b.size() < fb.edges.size();
-        if (best <= 0.0 && pruned_some && !b_in_a && !a_in_b &&
+        const auto inside = [&] {
+            return bounded ? tb->any_inside() || ta->any_inside() : b_in_a || a_in_b;
+        };
+        if (best <= 0.0 && pruned_some && !inside() &&
             !edge_crosses(fa.edges, r.edges_a, fa.vertices, r.nb, r.ob) &&
             !edge_crosses(fb.edges, r.edges_b, r.vb, fa.face_normals, fa.face_offsets)) {
             Vec3 m;
@@ -623,13 +893,22 @@ double polyhedron_overlap_along(const PosedPolyhedron& a, const PosedPolyhedron&
 
 PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b,
                                      bool with_patch) {
-    return common_plane(a, b, with_patch, nullptr);
+    return common_plane(a, b, with_patch, nullptr, detail::FaceScan::automatic);
 }
 
 PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b,
                                      const PatchTest& need_patch) {
-    return common_plane(a, b, true, &need_patch);
+    return common_plane(a, b, true, &need_patch, detail::FaceScan::automatic);
 }
+
+namespace detail {
+
+PolyhedronContact polyhedron_contact_with(const PosedPolyhedron& a, const PosedPolyhedron& b,
+                                          FaceScan scan, bool with_patch) {
+    return common_plane(a, b, with_patch, nullptr, scan);
+}
+
+} // namespace detail
 
 PolyhedronContact contact_patch_along(const PosedPolyhedron& a, const PosedPolyhedron& b,
                                       const Vec3& m) {

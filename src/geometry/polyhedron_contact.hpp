@@ -120,6 +120,19 @@ using PatchTest = std::function<bool(const PolyhedronContact&)>;
 [[nodiscard]] PolyhedronContact
 polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b, const PatchTest& need_patch);
 
+namespace detail {
+/// How the common plane's face stages scan (the answer is the same bits either way).
+enum class FaceScan {
+    automatic, ///< bounded for bodies with more vertices than faces (polyhedron_contact.cpp)
+    full,      ///< every vertex against every face plane, the prune from the full tables
+    bounded,   ///< only the faces whose upper bound can be the largest; the rest on demand
+};
+/// polyhedron_contact (without a patch test) with the face stages chosen: for tests.
+[[nodiscard]] PolyhedronContact polyhedron_contact_with(const PosedPolyhedron& a,
+                                                        const PosedPolyhedron& b, FaceScan scan,
+                                                        bool with_patch = true);
+} // namespace detail
+
 /// Points and patch for a given normal m (unit, from B to A, world frame), as polyhedron_contact
 /// computes them after finding its plane; fills depth (h_A(-m) + h_B(m)), normal, point, points,
 /// patch and patch_area. Gives a patch to a normal found otherwise (e.g. by EPA).
