@@ -956,7 +956,7 @@ void System::compute_forces(bool kick_requested, bool forces_cleared) {
                 const std::size_t p0 = u * particle_unit_size;
                 half_kick(p0, std::min(n, p0 + particle_unit_size));
             }
-            rotate_bodies(false);
+            rotate_bodies(1, false);
         }
     }
 
@@ -1109,10 +1109,11 @@ int System::kick_drift(std::size_t p0, std::size_t p1, bool same_size, double li
     return moved != 0 ? 1 : 0;
 }
 
-// The start of a step: `kicks` half kicks (1, or 2 when the last step left its second one to this
-// pass), drift, displacement check and, on one thread without bodies or mesh walls, the clearing of
-// forces and torques, in one pass; bodies rotate; the list is rebuilt when a particle moved more
-// than half the skin. Returns whether the forces and torques were cleared.
+// The start of a step: bodies kick their angular momentum and rotate (`kicks` half kicks of L),
+// then `kicks` half kicks (1, or 2 when the last step left its second one to this pass), drift,
+// displacement check and, on one thread, the clearing of forces and torques, in one pass over the
+// particles; the list is rebuilt when a particle moved more than half the skin. Returns whether
+// the forces and torques were cleared.
 bool System::begin_step(int kicks) {
     if (!list_valid_) {
         rebuild_neighbours();
@@ -1121,10 +1122,14 @@ bool System::begin_step(int kicks) {
     const bool same_size = nl_.positions_at_build().size() == n && nl_.offsets().size() == n + 1;
     const double lim2 = 0.25 * nl_.skin() * nl_.skin();
     const std::size_t units = (n + particle_unit_size - 1) / particle_unit_size;
-    // Bodies and mesh walls add their forces after the sphere loop (body_forces), which clears
-    // nothing; with several threads the particle sums set the forces.
-    const bool clear = threads_ == 1 && !generic_contacts();
-    KILN_ASSERT(kicks == 1 || (kicks == 2 && !generic_contacts()));
+    // The rotation reads the torques before the pass below clears them. The pass leaves a body's
+    // omega as it is (its inv_inertia is 0: omega + 0 * torque), so the order of the two changes
+    // no bit. With several threads the particle sums set the forces (nothing to clear).
+    if (has_bodies_) {
+        rotate_bodies(kicks, true);
+    }
+    const bool clear = threads_ == 1;
+    KILN_ASSERT(kicks == 1 || kicks == 2);
     int moved = same_size ? 0 : 1;
 #pragma omp parallel for num_threads(threads_) schedule(static) reduction(| : moved)
     for (std::size_t u = 0; u < units; ++u) {
@@ -1137,9 +1142,6 @@ bool System::begin_step(int kicks) {
             moved |= clear ? kick_drift<1, true>(p0, p1, same_size, lim2)
                            : kick_drift<1, false>(p0, p1, same_size, lim2);
         }
-    }
-    if (has_bodies_) {
-        rotate_bodies(true);
     }
     if (moved != 0) {
         rebuild_neighbours();
@@ -1155,8 +1157,10 @@ void System::step() {
 }
 
 void System::advance(long steps) {
-    // Bodies and mesh walls kick after body_forces, and recorded onsets are read after each step.
-    if (steps < 2 || generic_contacts() || spec_.record_contact_onsets) {
+    // Recorded onsets are read after each step. Bodies and mesh walls add their forces after the
+    // sphere pass (body_forces): their second half kick waits for the next begin_step as the
+    // spheres' does, and the omega of a body between two steps, which nobody reads, is not formed.
+    if (steps < 2 || spec_.record_contact_onsets) {
         for (long s = 0; s < steps; ++s) {
             step();
         }

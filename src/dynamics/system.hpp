@@ -197,7 +197,7 @@ class System {
     void place(const InsertSpec& ins, double radius, const Vec3& x);
     Quat initial_orientation(const OrientationSpec& o);
     void body_forces(ChunkTotals& pairs, ChunkTotals& walls);
-    void rotate_bodies(bool drift);
+    void rotate_bodies(int kicks, bool drift);
     void index_bodies();
     void check_time_step();
     void compute_forces(bool kick_requested = false, bool forces_cleared = false);

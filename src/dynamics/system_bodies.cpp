@@ -23,15 +23,19 @@ double ratio_size(const Element& a, const Element* b) {
 
 } // namespace
 
-void System::rotate_bodies(bool drift) {
-    // Half kick of the world angular momentum, then (drift) the free rotation over the step by the
-    // symmetric splitting of geometry/rotation.hpp; omega is derived from (q, L) for the contacts.
+void System::rotate_bodies(int kicks, bool drift) {
+    // `kicks` half kicks of the world angular momentum (2: the second of the last step, whose
+    // omega nobody read, and the first of this one, each rounded as its own pass), then (drift)
+    // the free rotation over the step by the symmetric splitting of geometry/rotation.hpp; omega
+    // (world frame) is derived from (q, L) for the contacts.
     const double h = 0.5 * spec_.time_step;
     // One rotation matrix per body and step: it turns L into the body frame for the free
     // rotation (bodies eight at a time in vector lanes), is then replaced by that of the new q,
     // and gives omega (no quaternion-vector products).
     for (const std::uint32_t i : bodies_) {
-        geometry::kick_angular_momentum(p_.ang_mom[i], p_.torque[i], h);
+        for (int k = 0; k < kicks; ++k) {
+            geometry::kick_angular_momentum(p_.ang_mom[i], p_.torque[i], h);
+        }
     }
     if (drift) {
         geometry::free_rotate_bodies(bodies_.data(), bodies_.size(), p_.q.data(), rot_.data(),

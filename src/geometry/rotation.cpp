@@ -12,21 +12,9 @@
 namespace kiln::geometry {
 
 Mat3 rotation_matrix(const Quat& q) {
-    // Standard form (e.g. Shoemake 1985) with w the scalar part; the seed's printed matrix
-    // (Oschmann 2019, Table 3) has a wrong (2,2) entry and sign errors and is not used.
+    // unit_rotation_matrix (rotation.hpp); the seed's printed matrix (Oschmann 2019, Table 3) has
+    // a wrong (2,2) entry and sign errors and is not used.
     return unit_rotation_matrix(q.normalized());
-}
-
-Mat3 unit_rotation_matrix(const Quat& u) {
-    const double w = u.w();
-    const double x = u.x();
-    const double y = u.y();
-    const double z = u.z();
-    Mat3 r;
-    r << 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y), //
-        2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),  //
-        2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y);
-    return r;
 }
 
 Vec3 angular_velocity_world(const Quat& q, const Vec3& L_world, const Vec3& inertia_principal) {
