@@ -121,8 +121,9 @@ struct PairArrays {
 #if defined(__AVX2__) && defined(__FMA__)
 /// One chunk's inner list (two-level Verlet list, docs/architecture.md "Inner list"): the list
 /// entries of the chunk whose gap |x_i - x_j| - (r_i + r_j) was below the inner gap at the
-/// positions where it was built, in increasing entry order. The pointers are at the chunk's part
-/// of the arrays (its first entry index for the entries, a quarter of it for `was`).
+/// positions where it was built, and those of particles loose since, in increasing entry order. The
+/// pointers are at the chunk's part of the arrays (its first entry index for the entries, a quarter
+/// of it for `was`).
 struct InnerChunk {
     std::uint32_t* k;    ///< list entries
     std::uint32_t* i;    ///< their owners
