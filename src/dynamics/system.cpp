@@ -926,7 +926,7 @@ void System::loosen(const std::vector<std::uint32_t>& loose) {
     }
     inner_loose_ += loose.size();
     inner_loosened_ += static_cast<long>(loose.size());
-    if (inner_loose_ > p_.size() / 64 + 16) {
+    if (inner_loose_ > p_.size() / 256 + 8) {
         inner_valid_ = false;
         inner_next_build_ = step_ + inner_holdoff;
         std::fill(room2_.begin(), room2_.end(), std::numeric_limits<double>::infinity());
@@ -966,8 +966,10 @@ void System::loosen(const std::vector<std::uint32_t>& loose) {
         const std::size_t begin = u * pair_chunk_size;
         const std::size_t end = std::min(entries, begin + pair_chunk_size);
         std::size_t c = begin;
-        for (std::size_t k = begin; k < end; ++k) {
-            if (((inner_bits_[k / 64] >> (k % 64)) & 1U) != 0U) {
+        for (std::size_t word = begin / 64; word * 64 < end; ++word) {
+            // begin is a multiple of 64 and the bits of the chunk's tail are never set.
+            for (std::uint64_t bits = inner_bits_[word]; bits != 0; bits &= bits - 1) {
+                const std::size_t k = word * 64 + static_cast<std::size_t>(std::countr_zero(bits));
                 inner_k_[c] = static_cast<std::uint32_t>(k);
                 inner_i_[c] = owner[k];
                 inner_j_[c] = nb[k];
