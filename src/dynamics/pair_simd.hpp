@@ -119,20 +119,41 @@ struct PairArrays {
 };
 
 #if defined(__AVX2__) && defined(__FMA__)
+/// One chunk's inner list (two-level Verlet list, docs/architecture.md "Inner list"): the list
+/// entries of the chunk whose gap |x_i - x_j| - (r_i + r_j) was below the inner gap at the
+/// positions where it was built, and those of particles loose since, in increasing entry order. The
+/// pointers are at the chunk's part of the arrays (its first entry index for the entries, a quarter
+/// of it for `was`).
+struct InnerChunk {
+    std::uint32_t* k;    ///< list entries
+    std::uint32_t* i;    ///< their owners
+    std::uint32_t* j;    ///< their partners
+    double* rsum2;       ///< their (r_i + r_j)^2 (m^2)
+    std::uint8_t* was;   ///< per group of four inner entries, bit l: inner entry 4 g + l touched
+                         ///< at the last filter (the inner list's own `touched`)
+    const double* near2; ///< list entry -> (r_i + r_j + inner gap)^2 (m^2), read when building
+    std::size_t count;   ///< inner entries of the chunk
+};
+
 /// The contact filter of System::pair_chunk four list entries at a time, from `begin` while four
 /// remain before `end`: which entries touch (squared distance below the squared radius sum, as
 /// squared_distance), their indices appended to active[n_active..] without a branch, the histories
 /// of the others cleared (bit mask) when one of them touched at the last call (`touched`, whose
 /// group of four entries is updated; `begin` is a multiple of four); with `rows` (several threads)
-/// the row of each entry, `begin` + its place among the touching ones or `zero_row`. Returns the
-/// first entry not taken.
-template <bool with_rows>
+/// the row of each entry, `begin` + its place among the touching ones or `zero_row`. With `build`,
+/// the entries closer than the inner gap (squared distance below inner->near2, the touching ones
+/// included) are written to `inner` (count and flags set). Returns the first entry not taken.
+template <bool with_rows, bool build = false>
 std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t end,
                              std::uint32_t* active, std::size_t& n_active, std::uint32_t* rows,
-                             std::uint32_t zero_row) {
+                             std::uint32_t zero_row, InnerChunk* inner = nullptr) {
     static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 records are packed");
     std::size_t n = n_active;
     std::size_t k = begin;
+    std::size_t c = 0; // inner entries so far (build)
+    if constexpr (build) {
+        std::fill_n(inner->was, (end - begin) / 4, std::uint8_t{0});
+    }
     for (; k + 4 <= end; k += 4) {
         const std::uint32_t* is = a.owner + k;
         const std::uint32_t* js = a.nb + k;
@@ -168,9 +189,82 @@ std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t
             }
             n += t;
         }
+        if constexpr (build) {
+            const __m256d near =
+                _mm256_cmp_pd(dist2, _mm256_loadu_pd(inner->near2 + k), _CMP_LT_OQ);
+            const unsigned mn = m | static_cast<unsigned>(_mm256_movemask_pd(near));
+            for (unsigned l = 0; l < 4; ++l) {
+                inner->k[c] = static_cast<std::uint32_t>(k + l);
+                inner->i[c] = is[l];
+                inner->j[c] = js[l];
+                inner->rsum2[c] = a.rsum2[k + l];
+                inner->was[c / 4] |= static_cast<std::uint8_t>(((m >> l) & 1U) << (c % 4));
+                c += (mn >> l) & 1U;
+            }
+        }
+    }
+    if constexpr (build) {
+        inner->count = c;
     }
     n_active = n;
     return k;
+}
+
+/// touching_entries on a chunk's inner list instead of all its entries (the same decisions, the
+/// touching entries appended in the same order, while no entry outside the inner list can touch):
+/// four inner entries at a time; the histories of those that stopped touching are cleared; the
+/// last 0-3 inner entries one at a time (squared_distance, the history cleared or kept by mask).
+/// With `rows`, the rows of the inner entries are set; the other entries keep the zero row
+/// written when the inner list was built.
+template <bool with_rows>
+void inner_touching_entries(const PairArrays& a, InnerChunk& in, std::size_t begin,
+                            std::uint32_t* active, std::size_t& n_active, std::uint32_t* rows,
+                            std::uint32_t zero_row) {
+    std::size_t n = n_active;
+    std::size_t c = 0;
+    for (; c + 4 <= in.count; c += 4) {
+        const Columns xi = columns(a.x, in.i + c);
+        const Columns xj = columns(a.x, in.j + c);
+        const __m256d d0 = _mm256_sub_pd(xi.c[0], xj.c[0]);
+        const __m256d d1 = _mm256_sub_pd(xi.c[1], xj.c[1]);
+        const __m256d d2 = _mm256_sub_pd(xi.c[2], xj.c[2]);
+        const __m256d dist2 =
+            _mm256_fmadd_pd(d2, d2, _mm256_fmadd_pd(d1, d1, _mm256_mul_pd(d0, d0)));
+        const __m256d touch = _mm256_cmp_pd(dist2, _mm256_loadu_pd(in.rsum2 + c), _CMP_LT_OQ);
+        const auto m = static_cast<unsigned>(_mm256_movemask_pd(touch));
+        std::uint8_t& was = in.was[c / 4];
+        const unsigned stopped = was & ~m;
+        if (stopped != 0U) {
+            for (unsigned l = 0; l < 4; ++l) {
+                if (((stopped >> l) & 1U) != 0U) {
+                    a.shear[in.k[c + l]].setZero();
+                }
+            }
+        }
+        was = static_cast<std::uint8_t>(m);
+        for (unsigned l = 0; l < 4; ++l) {
+            const unsigned t = (m >> l) & 1U;
+            const std::uint32_t k = in.k[c + l];
+            active[n] = k;
+            if constexpr (with_rows) {
+                rows[k] = t != 0 ? static_cast<std::uint32_t>(begin + n) : zero_row;
+            }
+            n += t;
+        }
+    }
+    for (; c < in.count; ++c) {
+        const std::uint32_t k = in.k[c];
+        const bool t = squared_distance(a.x[in.i[c]], a.x[in.j[c]]) < in.rsum2[c];
+        if (!t) {
+            a.shear[k].setZero();
+        }
+        active[n] = k;
+        if constexpr (with_rows) {
+            rows[k] = t ? static_cast<std::uint32_t>(begin + n) : zero_row;
+        }
+        n += t ? 1U : 0U;
+    }
+    n_active = n;
 }
 #endif
 

@@ -36,6 +36,11 @@ inline double fused(double a, double b, double c) {
 #endif
 }
 
+// Inner gap g of the filter's inner list, as a fraction of the skin: at 0.1 (0.1 mm in the settled
+// bed of bench/settled.cpp) the inner list holds 58-63 % of the entries (half of them touch) and
+// few particles move g / 2 in a thousand steps (docs/performance.md, session 12).
+constexpr double inner_gap_fraction = 0.1;
+
 // The displacement check's |d|^2 as the four-particle pass forms it: (dx^2 + dy^2) with rounded
 // products, then dz^2 by a fused multiply-add where the machine has FMA.
 inline double displacement2(const Vec3& d) {
@@ -317,10 +322,16 @@ void System::index_partners() {
     }
     touched_.assign((nb.size() + 3) / 4, 0x0F); // unknown: the next filter clears as before
     entry_rsum2_.resize(nb.size());
+    entry_near2_.resize(nb.size());
+    inner_gap_ = inner_gap_fraction * nl_.skin();
     for (std::size_t k = 0; k < nb.size(); ++k) {
         const double rsum = p_.radius[nl_.owners()[k]] + p_.radius[nb[k]];
         entry_rsum2_[k] = rsum * rsum;
+        entry_near2_[k] = (rsum + inner_gap_) * (rsum + inner_gap_);
     }
+    inner_valid_ = false;
+    inner_used_ = false;
+    room2_.assign(p_.size(), std::numeric_limits<double>::infinity());
     index_bodies();
     rekey_body_contacts(); // the list or the particle order changed
 }
@@ -488,8 +499,29 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
     std::size_t k_first = begin; // entries before it were filtered four at a time
 #if defined(__AVX2__) && defined(__FMA__)
     if constexpr (!bodies) {
-        k_first = simd::touching_entries<!direct>(arrays, begin, end, active, n_active,
-                                                  direct ? nullptr : result_row_.data(), zero_row);
+        std::uint32_t* rows = direct ? nullptr : result_row_.data();
+        if (filter_ == Filter::all) {
+            k_first = simd::touching_entries<!direct>(arrays, begin, end, active, n_active, rows,
+                                                      zero_row);
+        } else {
+            const std::size_t u = begin / pair_chunk_size;
+            simd::InnerChunk in{inner_k_.data() + begin,
+                                inner_i_.data() + begin,
+                                inner_j_.data() + begin,
+                                inner_rsum2_.data() + begin,
+                                inner_was_.data() + begin / 4,
+                                entry_near2_.data(),
+                                inner_count_[u]};
+            if (filter_ == Filter::inner) {
+                simd::inner_touching_entries<!direct>(arrays, in, begin, active, n_active, rows,
+                                                      zero_row);
+                k_first = begin + (end - begin) / 4 * 4; // the full filter's first entry left
+            } else {
+                k_first = simd::touching_entries<!direct, true>(arrays, begin, end, active,
+                                                                n_active, rows, zero_row, &in);
+                inner_count_[u] = in.count;
+            }
+        }
     }
 #endif
     for (std::size_t k = k_first; k < end; ++k) {
@@ -829,6 +861,128 @@ void System::note_body_onset(const BodyContactKey& key, const Vec3& n, const Vec
     onsets_.push_back(e);
 }
 
+// The pair filter of this step (filter_): the inner lists while they are valid, else every entry,
+// building new inner lists (not within inner_holdoff steps of the last ones being dropped, so that
+// a moving bed does not pay a build at every step). After a filter on the inner lists, touched_
+// is stale and set to unknown.
+void System::choose_filter(std::size_t pair_units) {
+    filter_ = Filter::all;
+#if defined(__AVX2__) && defined(__FMA__)
+    if (!has_bodies_ && inner_gap_ > 0.0 && use_inner_) {
+        if (inner_valid_) {
+            filter_ = Filter::inner;
+        } else if (step_ >= inner_next_build_) {
+            filter_ = Filter::build;
+            const std::size_t entries = nl_.partners().size();
+            inner_k_.resize(entries);
+            inner_i_.resize(entries);
+            inner_j_.resize(entries);
+            inner_rsum2_.resize(entries);
+            inner_was_.resize(entries / 4 + 1);
+            inner_count_.assign(pair_units, 0);
+        }
+    }
+#endif
+    if (filter_ != Filter::inner && inner_used_) {
+        std::fill(touched_.begin(), touched_.end(), std::uint8_t{0x0F});
+    }
+}
+
+// After a filter pass that built the inner lists: the bitmap of their entries, and each particle's
+// room, (g / 2 - |x - x_build|)^2 with g the inner gap less a margin of 1e-6 of it for the
+// round-off of distances and displacements (about 1e-16 of the coordinates). A particle that moves
+// more than its room from x_build is loose (the one pass reports it, loosen()): it may then have
+// moved more than g / 2 since this build. A particle with no room is loose at once.
+void System::finish_inner_build() {
+    const std::size_t entries = nl_.partners().size();
+    inner_bits_.assign(entries / 64 + 1, 0);
+    for (std::size_t u = 0; u < inner_count_.size(); ++u) {
+        const std::uint32_t* k = inner_k_.data() + u * pair_chunk_size;
+        for (std::size_t c = 0; c < inner_count_[u]; ++c) {
+            inner_bits_[k[c] / 64] |= std::uint64_t{1} << (k[c] % 64);
+        }
+    }
+    inner_loose_ = 0;
+    const double half = 0.5 * inner_gap_ * (1.0 - 1e-6);
+    const Vec3* x_build = nl_.positions_at_build().data();
+    std::vector<std::uint32_t> loose;
+    for (std::size_t i = 0; i < p_.size(); ++i) {
+        const double room = half - std::sqrt(displacement2(p_.x[i] - x_build[i]));
+        room2_[i] = room * room;
+        if (!(room > 0.0)) {
+            loose.push_back(static_cast<std::uint32_t>(i));
+        }
+    }
+    inner_valid_ = true;
+    loosen(loose);
+}
+
+// Adds every list entry of the loose particles `loose` to the inner lists (bitmap, then the compact
+// arrays of the chunks concerned, in entry order, their touched flags unknown); their rooms become
+// infinite. Too many loose particles drop the inner lists instead.
+void System::loosen(const std::vector<std::uint32_t>& loose) {
+    if (loose.empty() || !inner_valid_) {
+        return;
+    }
+    inner_loose_ += loose.size();
+    inner_loosened_ += static_cast<long>(loose.size());
+    if (inner_loose_ > p_.size() / 256 + 8) {
+        inner_valid_ = false;
+        inner_next_build_ = step_ + inner_holdoff;
+        std::fill(room2_.begin(), room2_.end(), std::numeric_limits<double>::infinity());
+        return;
+    }
+    const std::size_t entries = nl_.partners().size();
+    // The chunks' tails (fewer than four entries after the last group) are filtered one at a time
+    // anyway: they stay out of the inner lists.
+    const auto filtered_in_groups = [&](std::size_t k) {
+        const std::size_t begin = k / pair_chunk_size * pair_chunk_size;
+        const std::size_t end = std::min(entries, begin + pair_chunk_size);
+        return k < begin + (end - begin) / 4 * 4;
+    };
+    std::vector<std::uint8_t> dirty(inner_count_.size(), 0);
+    const auto add = [&](std::size_t k) {
+        if (filtered_in_groups(k)) {
+            inner_bits_[k / 64] |= std::uint64_t{1} << (k % 64);
+            dirty[k / pair_chunk_size] = 1;
+        }
+    };
+    const auto& offsets = nl_.offsets();
+    for (const std::uint32_t i : loose) {
+        room2_[i] = std::numeric_limits<double>::infinity();
+        for (std::uint32_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+            add(k);
+        }
+        for (std::uint32_t a = as_partner_offsets_[i]; a < as_partner_offsets_[i + 1]; ++a) {
+            add(as_partner_[a]);
+        }
+    }
+    const auto& owner = nl_.owners();
+    const auto& nb = nl_.partners();
+    for (std::size_t u = 0; u < dirty.size(); ++u) {
+        if (dirty[u] == 0) {
+            continue;
+        }
+        const std::size_t begin = u * pair_chunk_size;
+        const std::size_t end = std::min(entries, begin + pair_chunk_size);
+        std::size_t c = begin;
+        for (std::size_t word = begin / 64; word * 64 < end; ++word) {
+            // begin is a multiple of 64 and the bits of the chunk's tail are never set.
+            for (std::uint64_t bits = inner_bits_[word]; bits != 0; bits &= bits - 1) {
+                const std::size_t k = word * 64 + static_cast<std::size_t>(std::countr_zero(bits));
+                inner_k_[c] = static_cast<std::uint32_t>(k);
+                inner_i_[c] = owner[k];
+                inner_j_[c] = nb[k];
+                inner_rsum2_[c] = entry_rsum2_[k];
+                ++c;
+            }
+        }
+        inner_count_[u] = c - begin;
+        std::fill_n(inner_was_.begin() + static_cast<std::ptrdiff_t>(begin / 4), (end - begin) / 4,
+                    std::uint8_t{0x0F});
+    }
+}
+
 void System::compute_forces(bool kick_requested, bool forces_cleared) {
     // With bodies, their contacts are added after the sphere loop (body_forces), so the kick waits.
     const bool kick = kick_requested && !generic_contacts();
@@ -854,6 +1008,7 @@ void System::compute_forces(bool kick_requested, bool forces_cleared) {
             v.clear();
         }
     }
+    choose_filter(pair_units);
     if (direct) {
         if (!forces_cleared) {
             p_.clear_forces();
@@ -943,6 +1098,12 @@ void System::compute_forces(bool kick_requested, bool forces_cleared) {
         }
     }
 
+    inner_used_ = filter_ == Filter::inner;
+    inner_steps_ += inner_used_ ? 1 : 0;
+    if (filter_ == Filter::build) {
+        finish_inner_build();
+    }
+
     // Bodies: element contacts in a fixed serial order, then the kick of every particle.
     ChunkTotals body_pairs;
     ChunkTotals body_walls;
@@ -994,14 +1155,13 @@ inline __m256d rounded(__m256d a) {
 // spread to that pattern; every double sees the operations of the scalar loop in the same order
 // (the same fused multiply-adds, as GCC contracts that loop): v = fma(h, fma(f, 1/m, g), v) per
 // kick, w = fma(h / I, t, w), x = fma(dt, v, x); the squared displacement is fma(dz, dz, dx dx + dy
-// dy) with both products rounded. Returns the mask of the particles that moved more than
-// sqrt(lim2).
+// dy) with both products rounded. Returns the squared displacements of the four.
 template <int kicks, bool clear>
-inline unsigned kick_drift_four(double* __restrict x, double* __restrict v, double* __restrict w,
-                                double* __restrict f, double* __restrict t,
-                                const double* __restrict inv_m, const double* __restrict inv_i,
-                                const double* __restrict x_build, double h, double dt,
-                                const __m256d g[3], __m256d lim2) {
+inline __m256d kick_drift_four(double* __restrict x, double* __restrict v, double* __restrict w,
+                               double* __restrict f, double* __restrict t,
+                               const double* __restrict inv_m, const double* __restrict inv_i,
+                               const double* __restrict x_build, double h, double dt,
+                               const __m256d g[3]) {
     const __m256d m4 = _mm256_loadu_pd(inv_m);
     const __m256d hi4 = _mm256_mul_pd(_mm256_set1_pd(h), _mm256_loadu_pd(inv_i));
     const __m256d m[3] = {_mm256_permute4x64_pd(m4, 0x40), _mm256_permute4x64_pd(m4, 0xA5),
@@ -1037,9 +1197,8 @@ inline unsigned kick_drift_four(double* __restrict x, double* __restrict v, doub
     const __m256d dx = _mm256_blend_pd(t0, t2, 0b1010);
     const __m256d dy = _mm256_shuffle_pd(t0, t1, 0b0101);
     const __m256d dz = _mm256_blend_pd(t2, t1, 0b1010);
-    const __m256d s2 = _mm256_fmadd_pd(
+    return _mm256_fmadd_pd(
         dz, dz, _mm256_add_pd(rounded(_mm256_mul_pd(dx, dx)), rounded(_mm256_mul_pd(dy, dy))));
-    return static_cast<unsigned>(_mm256_movemask_pd(_mm256_cmp_pd(s2, lim2, _CMP_GT_OQ)));
 }
 #endif
 
@@ -1048,10 +1207,13 @@ inline unsigned kick_drift_four(double* __restrict x, double* __restrict v, doub
 // Half kicks, drift and displacement check of the particles [p0, p1) in one pass. kicks = 2 is the
 // second half kick of the last step followed by the first of this one, each rounded as its own
 // pass (half_kick) rounds it, so the bits are those of two passes. With `clear`, forces and torques
-// are zeroed after their last read. Returns 1 when a particle moved more than half the skin since
-// the list build (squared distance above lim2, m^2). Four particles at a time with AVX2.
+// are zeroed after their last read. Returns the largest squared displacement since the list build
+// (m^2; 0 unless `same_size`; NaN ignored); with `same_size`, appends to `loose` the particles
+// whose squared displacement exceeds their room (room2_, the inner lists). Four particles at a
+// time with AVX2.
 template <int kicks, bool clear>
-int System::kick_drift(std::size_t p0, std::size_t p1, bool same_size, double lim2) {
+double System::kick_drift(std::size_t p0, std::size_t p1, bool same_size,
+                          std::vector<std::uint32_t>& loose) {
     const double dt = spec_.time_step;
     const double h = 0.5 * dt;
     const Vec3 g = spec_.gravity;
@@ -1063,7 +1225,8 @@ int System::kick_drift(std::size_t p0, std::size_t p1, bool same_size, double li
     const double* __restrict inv_m = p_.inv_mass.data();
     const double* __restrict inv_i = p_.inv_inertia.data();
     const Vec3* __restrict x_build = nl_.positions_at_build().data();
-    unsigned moved = 0;
+    const double* __restrict room2 = room2_.data();
+    double largest = 0.0;
     std::size_t i = p0;
 #if defined(__AVX2__) && defined(__FMA__)
     static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 records are packed");
@@ -1071,12 +1234,26 @@ int System::kick_drift(std::size_t p0, std::size_t p1, bool same_size, double li
         const __m256d gl[3] = {_mm256_setr_pd(g[0], g[1], g[2], g[0]),
                                _mm256_setr_pd(g[1], g[2], g[0], g[1]),
                                _mm256_setr_pd(g[2], g[0], g[1], g[2])};
-        const __m256d l2 = _mm256_set1_pd(lim2);
+        __m256d big = _mm256_setzero_pd();
         for (; i + 4 <= p1; i += 4) {
-            moved |= kick_drift_four<kicks, clear>(x[i].data(), v[i].data(), w[i].data(),
-                                                   f[i].data(), t[i].data(), inv_m + i, inv_i + i,
-                                                   x_build[i].data(), h, dt, gl, l2);
+            // max(a, b) gives b when a is NaN: NaN ignored, as the comparison it replaced did.
+            const __m256d s2 = kick_drift_four<kicks, clear>(
+                x[i].data(), v[i].data(), w[i].data(), f[i].data(), t[i].data(), inv_m + i,
+                inv_i + i, x_build[i].data(), h, dt, gl);
+            big = _mm256_max_pd(s2, big);
+            const auto out = static_cast<unsigned>(
+                _mm256_movemask_pd(_mm256_cmp_pd(s2, _mm256_loadu_pd(room2 + i), _CMP_GT_OQ)));
+            if (out != 0U) {
+                for (unsigned l = 0; l < 4; ++l) {
+                    if (((out >> l) & 1U) != 0U) {
+                        loose.push_back(static_cast<std::uint32_t>(i + l));
+                    }
+                }
+            }
         }
+        alignas(32) double lanes[4];
+        _mm256_store_pd(lanes, big);
+        largest = std::max({lanes[0], lanes[1], lanes[2], lanes[3]});
     }
 #endif
     for (; i < p1; ++i) {
@@ -1104,9 +1281,15 @@ int System::kick_drift(std::size_t p0, std::size_t p1, bool same_size, double li
             xi[q] = fused(dt, vi[q], x[i][q]);
         }
         x[i] = xi;
-        moved |= same_size && displacement2(xi - x_build[i]) > lim2 ? 1U : 0U;
+        if (same_size) {
+            const double d2 = displacement2(xi - x_build[i]);
+            largest = d2 > largest ? d2 : largest;
+            if (d2 > room2[i]) {
+                loose.push_back(static_cast<std::uint32_t>(i));
+            }
+        }
     }
-    return moved != 0 ? 1 : 0;
+    return largest;
 }
 
 // The start of a step: bodies kick their angular momentum and rotate (`kicks` half kicks of L),
@@ -1130,21 +1313,30 @@ bool System::begin_step(int kicks) {
     }
     const bool clear = threads_ == 1;
     KILN_ASSERT(kicks == 1 || kicks == 2);
-    int moved = same_size ? 0 : 1;
-#pragma omp parallel for num_threads(threads_) schedule(static) reduction(| : moved)
+    double largest = 0.0; // squared displacement since the list build (m^2)
+    unit_loose_.resize(units);
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(max : largest)
     for (std::size_t u = 0; u < units; ++u) {
         const std::size_t p0 = u * particle_unit_size;
         const std::size_t p1 = std::min(n, p0 + particle_unit_size);
+        std::vector<std::uint32_t>& loose = unit_loose_[u];
+        loose.clear();
+        double d2 = 0.0;
         if (kicks == 2) {
-            moved |= clear ? kick_drift<2, true>(p0, p1, same_size, lim2)
-                           : kick_drift<2, false>(p0, p1, same_size, lim2);
+            d2 = clear ? kick_drift<2, true>(p0, p1, same_size, loose)
+                       : kick_drift<2, false>(p0, p1, same_size, loose);
         } else {
-            moved |= clear ? kick_drift<1, true>(p0, p1, same_size, lim2)
-                           : kick_drift<1, false>(p0, p1, same_size, lim2);
+            d2 = clear ? kick_drift<1, true>(p0, p1, same_size, loose)
+                       : kick_drift<1, false>(p0, p1, same_size, loose);
         }
+        largest = std::max(largest, d2);
     }
-    if (moved != 0) {
-        rebuild_neighbours();
+    if (!same_size || largest > lim2) {
+        rebuild_neighbours(); // drops the inner lists
+    } else {
+        for (const auto& loose : unit_loose_) {
+            loosen(loose);
+        }
     }
     return clear;
 }

@@ -181,6 +181,16 @@ class System {
     /// the route before session 12, for tests and A/B). Same contacts and order; the forces agree
     /// to round-off (GCC contracts a * b + c differently in the two routes).
     void use_convex_blocks(bool on) { convex_blocks_ = on; }
+    /// Turns the inner list of the sphere pair filter (a two-level Verlet list) on (the default)
+    /// or off. The results are the same bits either way (tests, A/B).
+    void use_inner_list(bool on) {
+        use_inner_ = on;
+        inner_valid_ = false;
+    }
+    /// Steps whose pair filter took the inner list, and particles found loose (their entries added
+    /// to it), since construction (not saved in checkpoints; for tests and A/B).
+    [[nodiscard]] long inner_list_steps() const { return inner_steps_; }
+    [[nodiscard]] long inner_list_loosened() const { return inner_loosened_; }
     /// Convex pair queries that a cached or searched separating direction answered (no narrow
     /// phase), since construction or restart (not saved in checkpoints).
     [[nodiscard]] long separation_skips() const { return separation_skips_; }
@@ -200,10 +210,14 @@ class System {
     void rotate_bodies(int kicks, bool drift);
     void index_bodies();
     void check_time_step();
+    void choose_filter(std::size_t pair_units);
+    void finish_inner_build();
+    void loosen(const std::vector<std::uint32_t>& loose);
     void compute_forces(bool kick_requested = false, bool forces_cleared = false);
     bool begin_step(int kicks);
     template <int kicks, bool clear>
-    int kick_drift(std::size_t p0, std::size_t p1, bool same_size, double lim2);
+    double kick_drift(std::size_t p0, std::size_t p1, bool same_size,
+                      std::vector<std::uint32_t>& loose);
     template <class Law, bool direct, bool bodies, bool onsets = false>
     void pair_chunk(const Law& law, std::size_t begin, std::size_t end, ChunkTotals& t);
     void sum_pair_results(std::size_t i);
@@ -244,6 +258,35 @@ class System {
     // that stopped touching only; all bits set after a list build or a restart (unknown).
     std::vector<std::uint8_t> touched_;
     std::vector<double> entry_rsum2_; // (r_i + r_j)^2 of each list entry (m^2), set at each build
+    // Inner list of the four-entry filter (two-level Verlet list, docs/architecture.md "Inner
+    // list"): per pair chunk, the list entries whose gap |x_i - x_j| - (r_i + r_j) was below
+    // inner_gap_ at the positions of the filter pass that built it, and every entry of a particle
+    // that has since been loose (moved more than its room, room2_), in entry order (chunk u's part
+    // of the arrays starts at its first entry index, of inner_was_ at a quarter of it;
+    // inner_count_[u] entries; inner_bits_ has one bit per list entry). An entry outside them has
+    // both particles within g / 2 of where they were at the build, so it cannot touch, and the
+    // filter tests the inner entries only.
+    std::vector<std::uint32_t> inner_k_, inner_i_, inner_j_;
+    std::vector<std::size_t> inner_count_;
+    std::vector<double> inner_rsum2_;
+    std::vector<std::uint8_t> inner_was_;
+    std::vector<std::uint64_t> inner_bits_;
+    std::vector<double> entry_near2_; // (r_i + r_j + inner_gap_)^2 of each list entry (m^2)
+    // Per particle: (g / 2 - |x - x_build| at the inner build)^2 (m^2), infinite when loose or
+    // without inner lists.
+    std::vector<double> room2_;
+    std::vector<std::vector<std::uint32_t>> unit_loose_; // loose particles found by the pass
+    double inner_gap_ = 0;                               // m
+    bool inner_valid_ = false;    // the inner lists hold every entry that can touch
+    bool inner_used_ = false;     // the last filter ran on the inner lists (touched_ is stale)
+    bool use_inner_ = true;       // use_inner_list()
+    std::size_t inner_loose_ = 0; // loose particles since the inner build
+    long inner_next_build_ = 0;   // no inner build before this step (after dropping them)
+    static constexpr long inner_holdoff = 200;              // steps
+    long inner_steps_ = 0;                                  // inner_list_steps()
+    long inner_loosened_ = 0;                               // inner_list_loosened()
+    enum class Filter : std::uint8_t { all, build, inner }; // the pair filter of this step
+    Filter filter_ = Filter::all;
     int threads_ = 1;
     ContactCounters counters_;
     TimeStepReport ts_;
