@@ -15,11 +15,14 @@ here = os.path.dirname(os.path.abspath(__file__))
 build = sys.argv[1] if len(sys.argv) > 1 else os.path.join(here, "..", "..", "build")
 phi = {}
 m4_seeds = []  # solid fractions of the m = 4 pours, one per seed
+spheroid_seeds = {"sphere": [], "prolate_15": [], "prolate_20": []}  # the same for the spheroid test
 with open(os.path.join(build, "validation", "15_packing", "results.csv")) as f:
     for row in csv.DictReader(f):
         q = row["quantity"]
         if q.startswith("superball m = 4 seed") and q.endswith("solid fraction"):
             m4_seeds.append(float(row["measured"]))
+        elif " seed " in q and q.endswith("solid fraction") and q.split(" seed ")[0] in spheroid_seeds:
+            spheroid_seeds[q.split(" seed ")[0]].append(float(row["measured"]))
         elif q.endswith("solid fraction") and "seed" not in q:
             phi[q.split(": ")[0]] = float(row["measured"])
         elif q.startswith("superball m = 4: mean solid fraction"):
@@ -30,7 +33,10 @@ fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.6), sharey=True)
 ax1.plot([1.0, 1.5, 2.0], [0.64, 0.70, 0.69], "s--", color="gray",
          label="Donev et al. 2004 (MRJ, frictionless)")
 ax1.plot([1.0, 1.5, 2.0], [phi["spheres"], phi["spheroid 1.5:1"], phi["spheroid 2:1"]], "o-",
-         color="C0", label="kiln, poured (this case)")
+         color="C0", label="kiln, poured (this case): means of the seeds")
+for x, shape in ((1.0, "sphere"), (1.5, "prolate_15"), (2.0, "prolate_20")):
+    ax1.plot([x] * len(spheroid_seeds[shape]), spheroid_seeds[shape], ".", color="C0", alpha=0.5,
+             label="kiln, one pour per seed" if shape == "sphere" else None)
 ax1.set_xlabel("aspect ratio of prolate spheroids")
 ax1.set_ylabel("solid fraction")
 ax1.legend(fontsize=8)
