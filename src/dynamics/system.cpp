@@ -329,6 +329,17 @@ void System::index_partners() {
         entry_rsum2_[k] = rsum * rsum;
         entry_near2_[k] = (rsum + inner_gap_) * (rsum + inner_gap_);
     }
+    // One radius and one mass for every particle: the register path takes R* and m* once.
+    same_radius_ = 0.0;
+    same_mass_ = 0.0;
+    if (!p_.radius.empty() &&
+        std::all_of(p_.radius.begin(), p_.radius.end(),
+                    [&](double r) { return r == p_.radius.front(); }) &&
+        std::all_of(p_.mass.begin(), p_.mass.end(),
+                    [&](double m) { return m == p_.mass.front(); })) {
+        same_radius_ = p_.radius.front();
+        same_mass_ = p_.mass.front();
+    }
     inner_valid_ = false;
     inner_used_ = false;
     room2_.assign(p_.size(), std::numeric_limits<double>::infinity());
@@ -416,6 +427,10 @@ void System::find_wall_candidates() {
                 spec_.walls[w].shape);
         }
     }
+    wall_touched_.resize(nw);
+    for (std::size_t w = 0; w < nw; ++w) {
+        wall_touched_[w].assign(wall_candidates_[w].size(), 1); // unknown: the next scan clears
+    }
     // Bodies: the same test with the bounding sphere, body by body (body_forces() loops so).
     body_wall_offsets_.assign(bodies_.size() + 1, 0);
     body_walls_.clear();
@@ -494,7 +509,9 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
                                   torque,
                                   direct ? nullptr : pair_result_.data(),
                                   touched_.data(),
-                                  entry_rsum2_.data()};
+                                  entry_rsum2_.data(),
+                                  same_radius_,
+                                  same_mass_};
 #endif
     std::size_t k_first = begin; // entries before it were filtered four at a time
 #if defined(__AVX2__) && defined(__FMA__)
@@ -782,9 +799,10 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
         const auto& cand = wall_candidates_[w];
         const auto lo = std::lower_bound(cand.begin(), cand.end(), p0);
         const auto hi = std::lower_bound(lo, cand.end(), p1);
+        std::uint8_t* touched = wall_touched_[w].data() + (lo - cand.begin());
         std::visit(
             [&](const auto& shape) {
-                for (auto it = lo; it != hi; ++it) {
+                for (auto it = lo; it != hi; ++it, ++touched) {
                     if (n_active == capacity) {
                         flush();
                     }
@@ -812,7 +830,12 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
                     active[n_active] = i;
                     wall_of[n_active] = static_cast<std::uint32_t>(w);
                     n_active += touch ? 1U : 0U;
-                    keep_or_clear(wall_shear_[i * nw + w], touch);
+                    // Only a candidate that touched at the last step and does not now can hold a
+                    // history to clear: the histories of the others are not read here.
+                    if (!touch && *touched != 0) {
+                        wall_shear_[i * nw + w].setZero();
+                    }
+                    *touched = touch ? 1U : 0U;
                 }
             },
             spec_.walls[w].shape);

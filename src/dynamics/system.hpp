@@ -243,6 +243,9 @@ class System {
     std::vector<std::uint32_t> new_place_;
     std::vector<std::uint8_t> wall_mark_;
     std::vector<std::vector<std::uint32_t>> wall_candidates_;
+    // Per wall, one flag per candidate: it touched the wall at the last scan (wall_unit), 1 after
+    // a build (unknown). A clear flag implies a zero history, so the scan leaves it unread.
+    std::vector<std::vector<std::uint8_t>> wall_touched_;
     std::vector<int> wall_material_; // material of each analytic wall (spec_.walls order)
     // With more than one thread, pair results go to rows of `pair_result_` (force, torque on i,
     // torque on j; a chunk's touching entries in order from the chunk's first entry index, plus a
@@ -258,6 +261,10 @@ class System {
     // that stopped touching only; all bits set after a list build or a restart (unknown).
     std::vector<std::uint8_t> touched_;
     std::vector<double> entry_rsum2_; // (r_i + r_j)^2 of each list entry (m^2), set at each build
+    // The radius (m) and mass (kg) of every particle when all have the same, else 0; set at each
+    // build (radii and masses do not change between builds).
+    double same_radius_ = 0.0;
+    double same_mass_ = 0.0;
     // Inner list of the four-entry filter (two-level Verlet list, docs/architecture.md "Inner
     // list"): per pair chunk, the list entries whose gap |x_i - x_j| - (r_i + r_j) was below
     // inner_gap_ at the positions of the filter pass that built it, and every entry of a particle
