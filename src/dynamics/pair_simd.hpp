@@ -98,6 +98,14 @@ inline void set(Vec3& a, __m128d xy, double z) {
 #endif
 
 #ifdef __AVX2__
+/// The touching list entries of a chunk as the filters append them, with their particles, so that
+/// the register path reads the particles' indices from consecutive places.
+struct ActiveList {
+    std::uint32_t* k; ///< list entries
+    std::uint32_t* i; ///< their owners
+    std::uint32_t* j; ///< their partners
+};
+
 /// Particle arrays (world frame, SI) read and written by `contact_groups`, and the list's arrays.
 struct PairArrays {
     const std::uint32_t* owner; ///< list entry -> particle i
@@ -148,7 +156,7 @@ struct InnerChunk {
 /// included) are written to `inner` (count and flags set). Returns the first entry not taken.
 template <bool with_rows, bool build = false>
 std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t end,
-                             std::uint32_t* active, std::size_t& n_active, std::uint32_t* rows,
+                             const ActiveList& active, std::size_t& n_active, std::uint32_t* rows,
                              std::uint32_t zero_row, InnerChunk* inner = nullptr) {
     static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 records are packed");
     std::size_t n = n_active;
@@ -186,7 +194,9 @@ std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t
         was = static_cast<std::uint8_t>(m);
         for (unsigned l = 0; l < 4; ++l) {
             const unsigned t = (m >> l) & 1U;
-            active[n] = static_cast<std::uint32_t>(k + l);
+            active.k[n] = static_cast<std::uint32_t>(k + l);
+            active.i[n] = is[l];
+            active.j[n] = js[l];
             if constexpr (with_rows) {
                 rows[k + l] = t != 0 ? static_cast<std::uint32_t>(begin + n) : zero_row;
             }
@@ -221,7 +231,7 @@ std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t
 /// written when the inner list was built.
 template <bool with_rows>
 void inner_touching_entries(const PairArrays& a, InnerChunk& in, std::size_t begin,
-                            std::uint32_t* active, std::size_t& n_active, std::uint32_t* rows,
+                            const ActiveList& active, std::size_t& n_active, std::uint32_t* rows,
                             std::uint32_t zero_row) {
     std::size_t n = n_active;
     std::size_t c = 0;
@@ -248,7 +258,9 @@ void inner_touching_entries(const PairArrays& a, InnerChunk& in, std::size_t beg
         for (unsigned l = 0; l < 4; ++l) {
             const unsigned t = (m >> l) & 1U;
             const std::uint32_t k = in.k[c + l];
-            active[n] = k;
+            active.k[n] = k;
+            active.i[n] = in.i[c + l];
+            active.j[n] = in.j[c + l];
             if constexpr (with_rows) {
                 rows[k] = t != 0 ? static_cast<std::uint32_t>(begin + n) : zero_row;
             }
@@ -261,7 +273,9 @@ void inner_touching_entries(const PairArrays& a, InnerChunk& in, std::size_t beg
         if (!t) {
             a.shear[k].setZero();
         }
-        active[n] = k;
+        active.k[n] = k;
+        active.i[n] = in.i[c];
+        active.j[n] = in.j[c];
         if constexpr (with_rows) {
             rows[k] = t ? static_cast<std::uint32_t>(begin + n) : zero_row;
         }
@@ -281,7 +295,7 @@ void inner_touching_entries(const PairArrays& a, InnerChunk& in, std::size_t beg
 template <unsigned variant, class Law, bool direct, bool uniform>
 std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std::int32_t* material,
                               double fn_floor, double rolling, double dt, const PairArrays& a,
-                              const std::uint32_t* active, std::size_t n, std::size_t first_row,
+                              const ActiveList& active, std::size_t n, std::size_t first_row,
                               double& energy, double& max_ratio) {
     constexpr int W = 4;
     using V = contact::lanes::V4;
@@ -337,9 +351,9 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
         std::uint32_t is[W];
         std::uint32_t js[W];
         for (int l = 0; l < W; ++l) {
-            ks[l] = active[g + l];
-            is[l] = a.owner[ks[l]];
-            js[l] = a.nb[ks[l]];
+            ks[l] = active.k[g + l];
+            is[l] = active.i[g + l];
+            js[l] = active.j[g + l];
         }
         if constexpr (!uniform) {
             V ri{};
@@ -550,7 +564,7 @@ void wall_contacts(const Law& law, const PairTable& pairs, const std::int32_t* m
 template <class Law, bool direct>
 std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
                            double fn_floor, double rolling, double dt, const PairArrays& a,
-                           const std::uint32_t* active, std::size_t n, std::size_t first_row,
+                           const ActiveList& active, std::size_t n, std::size_t first_row,
                            double& energy, double& max_ratio) {
     constexpr unsigned base = contact::cap_when_sliding | contact::project_by_distance;
     return with_cheapest_variant<base>(pairs, rolling, [&](auto variant) {
