@@ -312,7 +312,8 @@ void inner_touching_entries(const PairArrays& a, InnerChunk& in, std::size_t beg
 }
 #endif
 
-/// The touching list entries active[0..n) of a chunk, four at a time with the law on the four
+/// The touching list entries active.k[0..n) of a chunk (their particles and centre differences
+/// as the filter appended them), four at a time with the law on the four
 /// lanes of a register (AVX2): records transposed in registers, geometry and law (evaluate_lanes),
 /// then the results added to force/torque contact by contact in list order (`direct`, one thread)
 /// or written to rows[9 (first_row + a)] (several threads). Pair properties from `pairs` by the
@@ -585,7 +586,7 @@ void wall_contacts(const Law& law, const PairTable& pairs, const std::int32_t* m
 }
 
 /// contact_groups_as with the cheapest variant of the law (with_cheapest_variant), the history
-/// projected with the centre difference.
+/// projected with the centre difference; R* and m* taken once when a.same_radius is set.
 template <class Law, bool direct>
 std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
                            double fn_floor, double rolling, double dt, const PairArrays& a,

@@ -332,7 +332,7 @@ void System::index_partners() {
     // One radius and one mass for every particle: the register path takes R* and m* once.
     same_radius_ = 0.0;
     same_mass_ = 0.0;
-    if (!p_.radius.empty() &&
+    if (use_uniform_ && !p_.radius.empty() &&
         std::all_of(p_.radius.begin(), p_.radius.end(),
                     [&](double r) { return r == p_.radius.front(); }) &&
         std::all_of(p_.mass.begin(), p_.mass.end(),
