@@ -104,25 +104,7 @@ struct ActiveList {
     std::uint32_t* k; ///< list entries
     std::uint32_t* i; ///< their owners
     std::uint32_t* j; ///< their partners
-    /// x_i - x_j (m, world), component by component, per touching entry; room for three more
-    /// than the entries of a chunk.
-    double* d[3];
 };
-
-/// Appends the lanes of v set in the 4-bit mask m to out[0..), in lane order (writes four
-/// doubles).
-inline void compress_store(double* out, __m256d v, unsigned m) {
-    // For each mask, the 32-bit lanes that gather its set doubles at the front.
-    alignas(32) static constexpr std::int32_t perm[16][8] = {
-        {0, 1, 0, 1, 0, 1, 0, 1}, {0, 1, 0, 1, 0, 1, 0, 1}, {2, 3, 0, 1, 0, 1, 0, 1},
-        {0, 1, 2, 3, 0, 1, 0, 1}, {4, 5, 0, 1, 0, 1, 0, 1}, {0, 1, 4, 5, 0, 1, 0, 1},
-        {2, 3, 4, 5, 0, 1, 0, 1}, {0, 1, 2, 3, 4, 5, 0, 1}, {6, 7, 0, 1, 0, 1, 0, 1},
-        {0, 1, 6, 7, 0, 1, 0, 1}, {2, 3, 6, 7, 0, 1, 0, 1}, {0, 1, 2, 3, 6, 7, 0, 1},
-        {4, 5, 6, 7, 0, 1, 0, 1}, {0, 1, 4, 5, 6, 7, 0, 1}, {2, 3, 4, 5, 6, 7, 0, 1},
-        {0, 1, 2, 3, 4, 5, 6, 7}};
-    const __m256i idx = _mm256_load_si256(reinterpret_cast<const __m256i*>(perm[m]));
-    _mm256_storeu_pd(out, _mm256_castps_pd(_mm256_permutevar8x32_ps(_mm256_castpd_ps(v), idx)));
-}
 
 /// Particle arrays (world frame, SI) read and written by `contact_groups`, and the list's arrays.
 struct PairArrays {
@@ -210,9 +192,6 @@ std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t
                 h + 8, _mm256_and_pd(_mm256_loadu_pd(h + 8), _mm256_permute4x64_pd(touch, 0xFE)));
         }
         was = static_cast<std::uint8_t>(m);
-        compress_store(active.d[0] + n, d0, m);
-        compress_store(active.d[1] + n, d1, m);
-        compress_store(active.d[2] + n, d2, m);
         for (unsigned l = 0; l < 4; ++l) {
             const unsigned t = (m >> l) & 1U;
             active.k[n] = static_cast<std::uint32_t>(k + l);
@@ -276,9 +255,6 @@ void inner_touching_entries(const PairArrays& a, InnerChunk& in, std::size_t beg
             }
         }
         was = static_cast<std::uint8_t>(m);
-        compress_store(active.d[0] + n, d0, m);
-        compress_store(active.d[1] + n, d1, m);
-        compress_store(active.d[2] + n, d2, m);
         for (unsigned l = 0; l < 4; ++l) {
             const unsigned t = (m >> l) & 1U;
             const std::uint32_t k = in.k[c + l];
@@ -294,9 +270,6 @@ void inner_touching_entries(const PairArrays& a, InnerChunk& in, std::size_t beg
     for (; c < in.count; ++c) {
         const std::uint32_t k = in.k[c];
         const bool t = squared_distance(a.x[in.i[c]], a.x[in.j[c]]) < in.rsum2[c];
-        for (int q = 0; q < 3; ++q) {
-            active.d[q][n] = a.x[in.i[c]][q] - a.x[in.j[c]][q];
-        }
         if (!t) {
             a.shear[k].setZero();
         }
@@ -406,6 +379,8 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
                 c.mu_roll[l] = pp.rolling_friction;
             }
         }
+        const Columns xi = columns(a.x, is);
+        const Columns xj = columns(a.x, js);
         const Columns vi = columns(a.vel, is);
         const Columns vj = columns(a.vel, js);
         const Columns wi = columns(a.omega, is);
@@ -413,7 +388,7 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
         const Columns sh = columns(a.shear, ks);
         V d[3];
         for (int q = 0; q < 3; ++q) {
-            d[q] = _mm256_loadu_pd(active.d[q] + g);
+            d[q] = xi.c[q] - xj.c[q];
             c.v[q] = vi.c[q] - vj.c[q];
             c.wi[q] = wi.c[q];
             c.wj[q] = wj.c[q];

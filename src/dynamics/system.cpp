@@ -499,8 +499,7 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
 #ifdef __AVX2__
     std::uint32_t active_i[pair_chunk_size];
     std::uint32_t active_j[pair_chunk_size];
-    double active_d[3][pair_chunk_size + 4];
-    const simd::ActiveList act{active, active_i, active_j, {active_d[0], active_d[1], active_d[2]}};
+    const simd::ActiveList act{active, active_i, active_j};
 #endif
 #ifdef __AVX2__
     const simd::PairArrays arrays{owner,
@@ -560,9 +559,6 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
 #ifdef __AVX2__
         active_i[n_active] = i;
         active_j[n_active] = j;
-        for (int q = 0; q < 3; ++q) {
-            active_d[q][n_active] = x[i][q] - x[j][q];
-        }
 #endif
         if constexpr (!direct) {
             // Rows of a chunk are its touching entries in order, from the chunk's first row.
