@@ -427,10 +427,6 @@ void System::find_wall_candidates() {
                 spec_.walls[w].shape);
         }
     }
-    wall_touched_.resize(nw);
-    for (std::size_t w = 0; w < nw; ++w) {
-        wall_touched_[w].assign(wall_candidates_[w].size(), 1); // unknown: the next scan clears
-    }
     // Bodies: the same test with the bounding sphere, body by body (body_forces() loops so).
     body_wall_offsets_.assign(bodies_.size() + 1, 0);
     body_walls_.clear();
@@ -497,11 +493,9 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
     std::uint32_t active[pair_chunk_size];
     std::size_t n_active = 0;
 #ifdef __AVX2__
-    std::uint32_t active_i[pair_chunk_size];
+    std::uint32_t active_i[pair_chunk_size]; // their owners and partners, for the register path
     std::uint32_t active_j[pair_chunk_size];
     const simd::ActiveList act{active, active_i, active_j};
-#endif
-#ifdef __AVX2__
     const simd::PairArrays arrays{owner,
                                   nb,
                                   shear,
@@ -808,10 +802,9 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
         const auto& cand = wall_candidates_[w];
         const auto lo = std::lower_bound(cand.begin(), cand.end(), p0);
         const auto hi = std::lower_bound(lo, cand.end(), p1);
-        std::uint8_t* touched = wall_touched_[w].data() + (lo - cand.begin());
         std::visit(
             [&](const auto& shape) {
-                for (auto it = lo; it != hi; ++it, ++touched) {
+                for (auto it = lo; it != hi; ++it) {
                     if (n_active == capacity) {
                         flush();
                     }
@@ -839,12 +832,7 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
                     active[n_active] = i;
                     wall_of[n_active] = static_cast<std::uint32_t>(w);
                     n_active += touch ? 1U : 0U;
-                    // Only a candidate that touched at the last step and does not now can hold a
-                    // history to clear: the histories of the others are not read here.
-                    if (!touch && *touched != 0) {
-                        wall_shear_[i * nw + w].setZero();
-                    }
-                    *touched = touch ? 1U : 0U;
+                    keep_or_clear(wall_shear_[i * nw + w], touch);
                 }
             },
             spec_.walls[w].shape);

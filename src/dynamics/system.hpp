@@ -253,9 +253,6 @@ class System {
     std::vector<std::uint32_t> new_place_;
     std::vector<std::uint8_t> wall_mark_;
     std::vector<std::vector<std::uint32_t>> wall_candidates_;
-    // Per wall, one flag per candidate: it touched the wall at the last scan (wall_unit), 1 after
-    // a build (unknown). A clear flag implies a zero history, so the scan leaves it unread.
-    std::vector<std::vector<std::uint8_t>> wall_touched_;
     std::vector<int> wall_material_; // material of each analytic wall (spec_.walls order)
     // With more than one thread, pair results go to rows of `pair_result_` (force, torque on i,
     // torque on j; a chunk's touching entries in order from the chunk's first entry index, plus a
