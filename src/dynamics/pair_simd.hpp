@@ -14,6 +14,7 @@
 #include "dynamics/wall.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <type_traits>
@@ -106,6 +107,19 @@ struct ActiveList {
     std::uint32_t* j; ///< their partners
 };
 
+/// Appends the 32-bit lanes of v whose bit is set in the 4-bit mask m to out[0..), in lane order
+/// (writes four values; those past the set lanes are overwritten by the next append).
+inline void append_lanes(std::uint32_t* out, __m128i v, unsigned m) {
+    // For each mask, the lanes that gather its set lanes at the front.
+    alignas(16) static constexpr std::int32_t perm[16][4] = {
+        {0, 0, 0, 0}, {0, 0, 0, 0}, {1, 0, 0, 0}, {0, 1, 0, 0}, {2, 0, 0, 0}, {0, 2, 0, 0},
+        {1, 2, 0, 0}, {0, 1, 2, 0}, {3, 0, 0, 0}, {0, 3, 0, 0}, {1, 3, 0, 0}, {0, 1, 3, 0},
+        {2, 3, 0, 0}, {0, 2, 3, 0}, {1, 2, 3, 0}, {0, 1, 2, 3}};
+    const __m128i idx = _mm_load_si128(reinterpret_cast<const __m128i*>(perm[m]));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out),
+                     _mm_castps_si128(_mm_permutevar_ps(_mm_castsi128_ps(v), idx)));
+}
+
 /// Particle arrays (world frame, SI) read and written by `contact_groups`, and the list's arrays.
 struct PairArrays {
     const std::uint32_t* owner; ///< list entry -> particle i
@@ -192,16 +206,22 @@ std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t
                 h + 8, _mm256_and_pd(_mm256_loadu_pd(h + 8), _mm256_permute4x64_pd(touch, 0xFE)));
         }
         was = static_cast<std::uint8_t>(m);
-        for (unsigned l = 0; l < 4; ++l) {
-            const unsigned t = (m >> l) & 1U;
-            active.k[n] = static_cast<std::uint32_t>(k + l);
-            active.i[n] = is[l];
-            active.j[n] = js[l];
-            if constexpr (with_rows) {
-                rows[k + l] = t != 0 ? static_cast<std::uint32_t>(begin + n) : zero_row;
+        // The touching entries and their particles appended with one shuffle each (n + 3 stays
+        // within the chunk: n counts touching entries before k).
+        append_lanes(active.k + n,
+                     _mm_add_epi32(_mm_set1_epi32(static_cast<int>(k)), _mm_setr_epi32(0, 1, 2, 3)),
+                     m);
+        append_lanes(active.i + n, _mm_loadu_si128(reinterpret_cast<const __m128i*>(is)), m);
+        append_lanes(active.j + n, _mm_loadu_si128(reinterpret_cast<const __m128i*>(js)), m);
+        if constexpr (with_rows) {
+            std::size_t r = n;
+            for (unsigned l = 0; l < 4; ++l) {
+                const unsigned t = (m >> l) & 1U;
+                rows[k + l] = t != 0 ? static_cast<std::uint32_t>(begin + r) : zero_row;
+                r += t;
             }
-            n += t;
         }
+        n += static_cast<std::size_t>(std::popcount(m));
         if constexpr (build) {
             const __m256d near =
                 _mm256_cmp_pd(dist2, _mm256_loadu_pd(inner->near2 + k), _CMP_LT_OQ);
@@ -255,17 +275,21 @@ void inner_touching_entries(const PairArrays& a, InnerChunk& in, std::size_t beg
             }
         }
         was = static_cast<std::uint8_t>(m);
-        for (unsigned l = 0; l < 4; ++l) {
-            const unsigned t = (m >> l) & 1U;
-            const std::uint32_t k = in.k[c + l];
-            active.k[n] = k;
-            active.i[n] = in.i[c + l];
-            active.j[n] = in.j[c + l];
-            if constexpr (with_rows) {
-                rows[k] = t != 0 ? static_cast<std::uint32_t>(begin + n) : zero_row;
+        const auto lanes = [&](const std::uint32_t* p) {
+            return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + c));
+        };
+        append_lanes(active.k + n, lanes(in.k), m);
+        append_lanes(active.i + n, lanes(in.i), m);
+        append_lanes(active.j + n, lanes(in.j), m);
+        if constexpr (with_rows) {
+            std::size_t r = n;
+            for (unsigned l = 0; l < 4; ++l) {
+                const unsigned t = (m >> l) & 1U;
+                rows[in.k[c + l]] = t != 0 ? static_cast<std::uint32_t>(begin + r) : zero_row;
+                r += t;
             }
-            n += t;
         }
+        n += static_cast<std::size_t>(std::popcount(m));
     }
     for (; c < in.count; ++c) {
         const std::uint32_t k = in.k[c];
