@@ -138,6 +138,9 @@ struct PairArrays {
     /// history.
     std::uint8_t* touched;
     const double* rsum2; ///< list entry -> (r_i + r_j)^2 (m^2)
+    /// The radius of every particle (m) when all have the same radius and mass, else 0.
+    double same_radius = 0.0;
+    double same_mass = 0.0; ///< the mass of every particle (kg) when same_radius is set
 };
 
 #if defined(__AVX2__) && defined(__FMA__)
@@ -314,7 +317,7 @@ void inner_touching_entries(const PairArrays& a, InnerChunk& in, std::size_t beg
 /// particles' `material`. Returns how many entries it took (a multiple of four); energy and
 /// max_ratio accumulate in entry order.
 /// `variant` selects the law's contact::LaneVariant (without_rolling only when rolling is 0).
-template <unsigned variant, class Law, bool direct>
+template <unsigned variant, class Law, bool direct, bool uniform>
 std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std::int32_t* material,
                               double fn_floor, double rolling, double dt, const PairArrays& a,
                               const ActiveList& active, std::size_t n, std::size_t first_row,
@@ -339,23 +342,56 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
     // Rounding may pick either of two ratios within an ulp of each other (a diagnostic only).
     V top = contact::lanes::splat(0.0, c.e_star);
     V bottom = contact::lanes::splat(1.0, c.e_star);
+    // What the lanes' radii and masses give, with three divisions fewer than the blocked loop of
+    // System::pair_chunk (the divider is the busiest unit here): one shared by R* and m*.
+    struct Sizes {
+        V ri, rj;   // radii (m)
+        V rsum;     // r_i + r_j (m)
+        V r_eff;    // R* (m)
+        V m_eff;    // m* (kg)
+        V diameter; // 2 min(r_i, r_j) (m)
+    };
+    const auto sizes = [](V ri, V rj, V mi, V mj) {
+        const V rsum = ri + rj;
+        const V msum = mi + mj;
+        const V inv_rm = 1.0 / (rsum * msum);
+        return Sizes{ri,
+                     rj,
+                     rsum,
+                     ri * rj * msum * inv_rm,
+                     mi * mj * rsum * inv_rm,
+                     2.0 * select(rj < ri, rj, ri)};
+    };
+    // With every particle alike (`uniform`: one radius a.same_radius, one mass a.same_mass), the
+    // sizes are the same for every group: taken once, the same bits.
+    Sizes z{};
+    if constexpr (uniform) {
+        const V r = contact::lanes::splat(a.same_radius, c.e_star);
+        const V m = contact::lanes::splat(a.same_mass, c.e_star);
+        z = sizes(r, r, m, m);
+    }
     std::size_t g = 0;
     for (; g + W <= n; g += W) {
         std::uint32_t ks[W];
         std::uint32_t is[W];
         std::uint32_t js[W];
-        V ri{};
-        V rj{};
-        V mi{};
-        V mj{};
         for (int l = 0; l < W; ++l) {
             ks[l] = active.k[g + l];
             is[l] = active.i[g + l];
             js[l] = active.j[g + l];
-            ri[l] = a.radius[is[l]];
-            rj[l] = a.radius[js[l]];
-            mi[l] = a.mass[is[l]];
-            mj[l] = a.mass[js[l]];
+        }
+        if constexpr (!uniform) {
+            V ri{};
+            V rj{};
+            V mi{};
+            V mj{};
+            for (int l = 0; l < W; ++l) {
+                ri[l] = a.radius[is[l]];
+                rj[l] = a.radius[js[l]];
+                mi[l] = a.mass[is[l]];
+                mj[l] = a.mass[js[l]];
+            }
+            z = sizes(ri, rj, mi, mj);
         }
         if (!one_pair) {
             for (int l = 0; l < W; ++l) {
@@ -382,9 +418,7 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
             c.wj[q] = wj.c[q];
             c.s[q] = sh.c[q];
         }
-        // Geometry as in the blocked loop of System::pair_chunk, with three divisions fewer (the
-        // divider is the busiest unit here): one for the normal, one shared by R* and m*.
-        const V rsum = ri + rj;
+        // Geometry as in the blocked loop of System::pair_chunk, with one division for the normal.
         const V d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         if constexpr ((variant & contact::project_by_distance) != 0) {
             for (int q = 0; q < 3; ++q) {
@@ -393,22 +427,19 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
             c.inv_d2 = 1.0 / d2;
         }
         const V dist = contact::lanes::vsqrt(d2);
-        const V overlap = rsum - dist;
+        const V overlap = z.rsum - dist;
         const V inv_dist = 1.0 / dist;
         for (int q = 0; q < 3; ++q) {
             c.n[q] = d[q] * inv_dist;
         }
         c.overlap = overlap;
-        const V msum = mi + mj;
-        const V inv_rm = 1.0 / (rsum * msum);
-        c.r_eff = ri * rj * msum * inv_rm;
-        c.m_eff = mi * mj * rsum * inv_rm;
-        c.lever_i = ri - 0.5 * overlap;
-        c.lever_j = rj - 0.5 * overlap;
-        const V diameter = 2.0 * select(rj < ri, rj, ri); // 2 std::min(ri, rj)
-        const auto larger = overlap * bottom > top * diameter;
+        c.r_eff = z.r_eff;
+        c.m_eff = z.m_eff;
+        c.lever_i = z.ri - 0.5 * overlap;
+        c.lever_j = z.rj - 0.5 * overlap;
+        const auto larger = overlap * bottom > top * z.diameter;
         top = select(larger, overlap, top);
-        bottom = select(larger, diameter, bottom);
+        bottom = select(larger, z.diameter, bottom);
         contact::evaluate_lanes<variant>(law, fn_floor, rolling, c, dt);
 
         const RowsXY f = rows_xy(c.f[0], c.f[1]);
@@ -554,7 +585,7 @@ void wall_contacts(const Law& law, const PairTable& pairs, const std::int32_t* m
 }
 
 /// contact_groups_as with the cheapest variant of the law (with_cheapest_variant), the history
-/// projected with the centre difference.
+/// projected with the centre difference; R* and m* taken once when a.same_radius is set.
 template <class Law, bool direct>
 std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
                            double fn_floor, double rolling, double dt, const PairArrays& a,
@@ -562,7 +593,12 @@ std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::in
                            double& energy, double& max_ratio) {
     constexpr unsigned base = contact::cap_when_sliding | contact::project_by_distance;
     return with_cheapest_variant<base>(pairs, rolling, [&](auto variant) {
-        return contact_groups_as<decltype(variant)::value, Law, direct>(
+        if (a.same_radius > 0.0) {
+            return contact_groups_as<decltype(variant)::value, Law, direct, true>(
+                law, pairs, material, fn_floor, rolling, dt, a, active, n, first_row, energy,
+                max_ratio);
+        }
+        return contact_groups_as<decltype(variant)::value, Law, direct, false>(
             law, pairs, material, fn_floor, rolling, dt, a, active, n, first_row, energy,
             max_ratio);
     });

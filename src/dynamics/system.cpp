@@ -329,6 +329,17 @@ void System::index_partners() {
         entry_rsum2_[k] = rsum * rsum;
         entry_near2_[k] = (rsum + inner_gap_) * (rsum + inner_gap_);
     }
+    // One radius and one mass for every particle: the register path takes R* and m* once.
+    same_radius_ = 0.0;
+    same_mass_ = 0.0;
+    if (use_uniform_ && !p_.radius.empty() &&
+        std::all_of(p_.radius.begin(), p_.radius.end(),
+                    [&](double r) { return r == p_.radius.front(); }) &&
+        std::all_of(p_.mass.begin(), p_.mass.end(),
+                    [&](double m) { return m == p_.mass.front(); })) {
+        same_radius_ = p_.radius.front();
+        same_mass_ = p_.mass.front();
+    }
     inner_valid_ = false;
     inner_used_ = false;
     room2_.assign(p_.size(), std::numeric_limits<double>::infinity());
@@ -497,7 +508,9 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
                                   torque,
                                   direct ? nullptr : pair_result_.data(),
                                   touched_.data(),
-                                  entry_rsum2_.data()};
+                                  entry_rsum2_.data(),
+                                  same_radius_,
+                                  same_mass_};
 #endif
     std::size_t k_first = begin; // entries before it were filtered four at a time
 #if defined(__AVX2__) && defined(__FMA__)
