@@ -14,6 +14,7 @@
 #include "dynamics/wall.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <type_traits>
@@ -98,6 +99,27 @@ inline void set(Vec3& a, __m128d xy, double z) {
 #endif
 
 #ifdef __AVX2__
+/// The touching list entries of a chunk as the filters append them, with their particles, so that
+/// the register path reads the particles' indices from consecutive places.
+struct ActiveList {
+    std::uint32_t* k; ///< list entries
+    std::uint32_t* i; ///< their owners
+    std::uint32_t* j; ///< their partners
+};
+
+/// Appends the 32-bit lanes of v whose bit is set in the 4-bit mask m to out[0..), in lane order
+/// (writes four values; those past the set lanes are overwritten by the next append).
+inline void append_lanes(std::uint32_t* out, __m128i v, unsigned m) {
+    // For each mask, the lanes that gather its set lanes at the front.
+    alignas(16) static constexpr std::int32_t perm[16][4] = {
+        {0, 0, 0, 0}, {0, 0, 0, 0}, {1, 0, 0, 0}, {0, 1, 0, 0}, {2, 0, 0, 0}, {0, 2, 0, 0},
+        {1, 2, 0, 0}, {0, 1, 2, 0}, {3, 0, 0, 0}, {0, 3, 0, 0}, {1, 3, 0, 0}, {0, 1, 3, 0},
+        {2, 3, 0, 0}, {0, 2, 3, 0}, {1, 2, 3, 0}, {0, 1, 2, 3}};
+    const __m128i idx = _mm_load_si128(reinterpret_cast<const __m128i*>(perm[m]));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out),
+                     _mm_castps_si128(_mm_permutevar_ps(_mm_castsi128_ps(v), idx)));
+}
+
 /// Particle arrays (world frame, SI) read and written by `contact_groups`, and the list's arrays.
 struct PairArrays {
     const std::uint32_t* owner; ///< list entry -> particle i
@@ -116,6 +138,9 @@ struct PairArrays {
     /// history.
     std::uint8_t* touched;
     const double* rsum2; ///< list entry -> (r_i + r_j)^2 (m^2)
+    /// The radius of every particle (m) when all have the same radius and mass, else 0.
+    double same_radius = 0.0;
+    double same_mass = 0.0; ///< the mass of every particle (kg) when same_radius is set
 };
 
 #if defined(__AVX2__) && defined(__FMA__)
@@ -145,7 +170,7 @@ struct InnerChunk {
 /// included) are written to `inner` (count and flags set). Returns the first entry not taken.
 template <bool with_rows, bool build = false>
 std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t end,
-                             std::uint32_t* active, std::size_t& n_active, std::uint32_t* rows,
+                             const ActiveList& active, std::size_t& n_active, std::uint32_t* rows,
                              std::uint32_t zero_row, InnerChunk* inner = nullptr) {
     static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 records are packed");
     std::size_t n = n_active;
@@ -181,14 +206,22 @@ std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t
                 h + 8, _mm256_and_pd(_mm256_loadu_pd(h + 8), _mm256_permute4x64_pd(touch, 0xFE)));
         }
         was = static_cast<std::uint8_t>(m);
-        for (unsigned l = 0; l < 4; ++l) {
-            const unsigned t = (m >> l) & 1U;
-            active[n] = static_cast<std::uint32_t>(k + l);
-            if constexpr (with_rows) {
-                rows[k + l] = t != 0 ? static_cast<std::uint32_t>(begin + n) : zero_row;
+        // The touching entries and their particles appended with one shuffle each (n + 3 stays
+        // within the chunk: n counts touching entries before k).
+        append_lanes(active.k + n,
+                     _mm_add_epi32(_mm_set1_epi32(static_cast<int>(k)), _mm_setr_epi32(0, 1, 2, 3)),
+                     m);
+        append_lanes(active.i + n, _mm_loadu_si128(reinterpret_cast<const __m128i*>(is)), m);
+        append_lanes(active.j + n, _mm_loadu_si128(reinterpret_cast<const __m128i*>(js)), m);
+        if constexpr (with_rows) {
+            std::size_t r = n;
+            for (unsigned l = 0; l < 4; ++l) {
+                const unsigned t = (m >> l) & 1U;
+                rows[k + l] = t != 0 ? static_cast<std::uint32_t>(begin + r) : zero_row;
+                r += t;
             }
-            n += t;
         }
+        n += static_cast<std::size_t>(std::popcount(m));
         if constexpr (build) {
             const __m256d near =
                 _mm256_cmp_pd(dist2, _mm256_loadu_pd(inner->near2 + k), _CMP_LT_OQ);
@@ -218,7 +251,7 @@ std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t
 /// written when the inner list was built.
 template <bool with_rows>
 void inner_touching_entries(const PairArrays& a, InnerChunk& in, std::size_t begin,
-                            std::uint32_t* active, std::size_t& n_active, std::uint32_t* rows,
+                            const ActiveList& active, std::size_t& n_active, std::uint32_t* rows,
                             std::uint32_t zero_row) {
     std::size_t n = n_active;
     std::size_t c = 0;
@@ -242,15 +275,21 @@ void inner_touching_entries(const PairArrays& a, InnerChunk& in, std::size_t beg
             }
         }
         was = static_cast<std::uint8_t>(m);
-        for (unsigned l = 0; l < 4; ++l) {
-            const unsigned t = (m >> l) & 1U;
-            const std::uint32_t k = in.k[c + l];
-            active[n] = k;
-            if constexpr (with_rows) {
-                rows[k] = t != 0 ? static_cast<std::uint32_t>(begin + n) : zero_row;
+        const auto lanes = [&](const std::uint32_t* p) {
+            return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + c));
+        };
+        append_lanes(active.k + n, lanes(in.k), m);
+        append_lanes(active.i + n, lanes(in.i), m);
+        append_lanes(active.j + n, lanes(in.j), m);
+        if constexpr (with_rows) {
+            std::size_t r = n;
+            for (unsigned l = 0; l < 4; ++l) {
+                const unsigned t = (m >> l) & 1U;
+                rows[in.k[c + l]] = t != 0 ? static_cast<std::uint32_t>(begin + r) : zero_row;
+                r += t;
             }
-            n += t;
         }
+        n += static_cast<std::size_t>(std::popcount(m));
     }
     for (; c < in.count; ++c) {
         const std::uint32_t k = in.k[c];
@@ -258,7 +297,9 @@ void inner_touching_entries(const PairArrays& a, InnerChunk& in, std::size_t beg
         if (!t) {
             a.shear[k].setZero();
         }
-        active[n] = k;
+        active.k[n] = k;
+        active.i[n] = in.i[c];
+        active.j[n] = in.j[c];
         if constexpr (with_rows) {
             rows[k] = t ? static_cast<std::uint32_t>(begin + n) : zero_row;
         }
@@ -268,17 +309,18 @@ void inner_touching_entries(const PairArrays& a, InnerChunk& in, std::size_t beg
 }
 #endif
 
-/// The touching list entries active[0..n) of a chunk, four at a time with the law on the four
+/// The touching list entries active.k[0..n) of a chunk (their particles and centre differences
+/// as the filter appended them), four at a time with the law on the four
 /// lanes of a register (AVX2): records transposed in registers, geometry and law (evaluate_lanes),
 /// then the results added to force/torque contact by contact in list order (`direct`, one thread)
 /// or written to rows[9 (first_row + a)] (several threads). Pair properties from `pairs` by the
 /// particles' `material`. Returns how many entries it took (a multiple of four); energy and
 /// max_ratio accumulate in entry order.
 /// `variant` selects the law's contact::LaneVariant (without_rolling only when rolling is 0).
-template <unsigned variant, class Law, bool direct>
+template <unsigned variant, class Law, bool direct, bool uniform>
 std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std::int32_t* material,
                               double fn_floor, double rolling, double dt, const PairArrays& a,
-                              const std::uint32_t* active, std::size_t n, std::size_t first_row,
+                              const ActiveList& active, std::size_t n, std::size_t first_row,
                               double& energy, double& max_ratio) {
     constexpr int W = 4;
     using V = contact::lanes::V4;
@@ -300,23 +342,56 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
     // Rounding may pick either of two ratios within an ulp of each other (a diagnostic only).
     V top = contact::lanes::splat(0.0, c.e_star);
     V bottom = contact::lanes::splat(1.0, c.e_star);
+    // What the lanes' radii and masses give, with three divisions fewer than the blocked loop of
+    // System::pair_chunk (the divider is the busiest unit here): one shared by R* and m*.
+    struct Sizes {
+        V ri, rj;   // radii (m)
+        V rsum;     // r_i + r_j (m)
+        V r_eff;    // R* (m)
+        V m_eff;    // m* (kg)
+        V diameter; // 2 min(r_i, r_j) (m)
+    };
+    const auto sizes = [](V ri, V rj, V mi, V mj) {
+        const V rsum = ri + rj;
+        const V msum = mi + mj;
+        const V inv_rm = 1.0 / (rsum * msum);
+        return Sizes{ri,
+                     rj,
+                     rsum,
+                     ri * rj * msum * inv_rm,
+                     mi * mj * rsum * inv_rm,
+                     2.0 * select(rj < ri, rj, ri)};
+    };
+    // With every particle alike (`uniform`: one radius a.same_radius, one mass a.same_mass), the
+    // sizes are the same for every group: taken once, the same bits.
+    Sizes z{};
+    if constexpr (uniform) {
+        const V r = contact::lanes::splat(a.same_radius, c.e_star);
+        const V m = contact::lanes::splat(a.same_mass, c.e_star);
+        z = sizes(r, r, m, m);
+    }
     std::size_t g = 0;
     for (; g + W <= n; g += W) {
         std::uint32_t ks[W];
         std::uint32_t is[W];
         std::uint32_t js[W];
-        V ri{};
-        V rj{};
-        V mi{};
-        V mj{};
         for (int l = 0; l < W; ++l) {
-            ks[l] = active[g + l];
-            is[l] = a.owner[ks[l]];
-            js[l] = a.nb[ks[l]];
-            ri[l] = a.radius[is[l]];
-            rj[l] = a.radius[js[l]];
-            mi[l] = a.mass[is[l]];
-            mj[l] = a.mass[js[l]];
+            ks[l] = active.k[g + l];
+            is[l] = active.i[g + l];
+            js[l] = active.j[g + l];
+        }
+        if constexpr (!uniform) {
+            V ri{};
+            V rj{};
+            V mi{};
+            V mj{};
+            for (int l = 0; l < W; ++l) {
+                ri[l] = a.radius[is[l]];
+                rj[l] = a.radius[js[l]];
+                mi[l] = a.mass[is[l]];
+                mj[l] = a.mass[js[l]];
+            }
+            z = sizes(ri, rj, mi, mj);
         }
         if (!one_pair) {
             for (int l = 0; l < W; ++l) {
@@ -343,9 +418,7 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
             c.wj[q] = wj.c[q];
             c.s[q] = sh.c[q];
         }
-        // Geometry as in the blocked loop of System::pair_chunk, with three divisions fewer (the
-        // divider is the busiest unit here): one for the normal, one shared by R* and m*.
-        const V rsum = ri + rj;
+        // Geometry as in the blocked loop of System::pair_chunk, with one division for the normal.
         const V d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         if constexpr ((variant & contact::project_by_distance) != 0) {
             for (int q = 0; q < 3; ++q) {
@@ -354,22 +427,19 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
             c.inv_d2 = 1.0 / d2;
         }
         const V dist = contact::lanes::vsqrt(d2);
-        const V overlap = rsum - dist;
+        const V overlap = z.rsum - dist;
         const V inv_dist = 1.0 / dist;
         for (int q = 0; q < 3; ++q) {
             c.n[q] = d[q] * inv_dist;
         }
         c.overlap = overlap;
-        const V msum = mi + mj;
-        const V inv_rm = 1.0 / (rsum * msum);
-        c.r_eff = ri * rj * msum * inv_rm;
-        c.m_eff = mi * mj * rsum * inv_rm;
-        c.lever_i = ri - 0.5 * overlap;
-        c.lever_j = rj - 0.5 * overlap;
-        const V diameter = 2.0 * select(rj < ri, rj, ri); // 2 std::min(ri, rj)
-        const auto larger = overlap * bottom > top * diameter;
+        c.r_eff = z.r_eff;
+        c.m_eff = z.m_eff;
+        c.lever_i = z.ri - 0.5 * overlap;
+        c.lever_j = z.rj - 0.5 * overlap;
+        const auto larger = overlap * bottom > top * z.diameter;
         top = select(larger, overlap, top);
-        bottom = select(larger, diameter, bottom);
+        bottom = select(larger, z.diameter, bottom);
         contact::evaluate_lanes<variant>(law, fn_floor, rolling, c, dt);
 
         const RowsXY f = rows_xy(c.f[0], c.f[1]);
@@ -515,15 +585,20 @@ void wall_contacts(const Law& law, const PairTable& pairs, const std::int32_t* m
 }
 
 /// contact_groups_as with the cheapest variant of the law (with_cheapest_variant), the history
-/// projected with the centre difference.
+/// projected with the centre difference; R* and m* taken once when a.same_radius is set.
 template <class Law, bool direct>
 std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
                            double fn_floor, double rolling, double dt, const PairArrays& a,
-                           const std::uint32_t* active, std::size_t n, std::size_t first_row,
+                           const ActiveList& active, std::size_t n, std::size_t first_row,
                            double& energy, double& max_ratio) {
     constexpr unsigned base = contact::cap_when_sliding | contact::project_by_distance;
     return with_cheapest_variant<base>(pairs, rolling, [&](auto variant) {
-        return contact_groups_as<decltype(variant)::value, Law, direct>(
+        if (a.same_radius > 0.0) {
+            return contact_groups_as<decltype(variant)::value, Law, direct, true>(
+                law, pairs, material, fn_floor, rolling, dt, a, active, n, first_row, energy,
+                max_ratio);
+        }
+        return contact_groups_as<decltype(variant)::value, Law, direct, false>(
             law, pairs, material, fn_floor, rolling, dt, a, active, n, first_row, energy,
             max_ratio);
     });

@@ -329,6 +329,17 @@ void System::index_partners() {
         entry_rsum2_[k] = rsum * rsum;
         entry_near2_[k] = (rsum + inner_gap_) * (rsum + inner_gap_);
     }
+    // One radius and one mass for every particle: the register path takes R* and m* once.
+    same_radius_ = 0.0;
+    same_mass_ = 0.0;
+    if (use_uniform_ && !p_.radius.empty() &&
+        std::all_of(p_.radius.begin(), p_.radius.end(),
+                    [&](double r) { return r == p_.radius.front(); }) &&
+        std::all_of(p_.mass.begin(), p_.mass.end(),
+                    [&](double m) { return m == p_.mass.front(); })) {
+        same_radius_ = p_.radius.front();
+        same_mass_ = p_.mass.front();
+    }
     inner_valid_ = false;
     inner_used_ = false;
     room2_.assign(p_.size(), std::numeric_limits<double>::infinity());
@@ -482,6 +493,9 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
     std::uint32_t active[pair_chunk_size];
     std::size_t n_active = 0;
 #ifdef __AVX2__
+    std::uint32_t active_i[pair_chunk_size]; // their owners and partners, for the register path
+    std::uint32_t active_j[pair_chunk_size];
+    const simd::ActiveList act{active, active_i, active_j};
     const simd::PairArrays arrays{owner,
                                   nb,
                                   shear,
@@ -494,15 +508,17 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
                                   torque,
                                   direct ? nullptr : pair_result_.data(),
                                   touched_.data(),
-                                  entry_rsum2_.data()};
+                                  entry_rsum2_.data(),
+                                  same_radius_,
+                                  same_mass_};
 #endif
     std::size_t k_first = begin; // entries before it were filtered four at a time
 #if defined(__AVX2__) && defined(__FMA__)
     if constexpr (!bodies) {
         std::uint32_t* rows = direct ? nullptr : result_row_.data();
         if (filter_ == Filter::all) {
-            k_first = simd::touching_entries<!direct>(arrays, begin, end, active, n_active, rows,
-                                                      zero_row);
+            k_first =
+                simd::touching_entries<!direct>(arrays, begin, end, act, n_active, rows, zero_row);
         } else {
             const std::size_t u = begin / pair_chunk_size;
             simd::InnerChunk in{inner_k_.data() + begin,
@@ -513,12 +529,12 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
                                 entry_near2_.data(),
                                 inner_count_[u]};
             if (filter_ == Filter::inner) {
-                simd::inner_touching_entries<!direct>(arrays, in, begin, active, n_active, rows,
+                simd::inner_touching_entries<!direct>(arrays, in, begin, act, n_active, rows,
                                                       zero_row);
                 k_first = begin + (end - begin) / 4 * 4; // the full filter's first entry left
             } else {
-                k_first = simd::touching_entries<!direct, true>(arrays, begin, end, active,
-                                                                n_active, rows, zero_row, &in);
+                k_first = simd::touching_entries<!direct, true>(arrays, begin, end, act, n_active,
+                                                                rows, zero_row, &in);
                 inner_count_[u] = in.count;
             }
         }
@@ -534,6 +550,10 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
             touch = touch && (shape[i] & shape[j]) < 0;
         }
         active[n_active] = static_cast<std::uint32_t>(k);
+#ifdef __AVX2__
+        active_i[n_active] = i;
+        active_j[n_active] = j;
+#endif
         if constexpr (!direct) {
             // Rows of a chunk are its touching entries in order, from the chunk's first row.
             result_row_[k] = touch ? static_cast<std::uint32_t>(begin + n_active) : zero_row;
@@ -600,7 +620,7 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
 #ifdef __AVX2__
     a_first =
         simd::contact_groups<Law, direct>(law, pairs_, p_.material.data(), fn_floor, rolling, dt,
-                                          arrays, active, n_active, begin, energy, max_ratio);
+                                          arrays, act, n_active, begin, energy, max_ratio);
 #endif
     for (std::size_t a0 = a_first; a0 < n_active; a0 += block) {
         const std::size_t m = std::min(block, n_active - a0);

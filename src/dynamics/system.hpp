@@ -187,6 +187,16 @@ class System {
         use_inner_ = on;
         inner_valid_ = false;
     }
+    /// Lets the register path of the sphere pairs take R* and m* once when every particle has the
+    /// same radius and mass (on, the default; from the next list build) or per contact (off, at
+    /// once). The results are the same bits either way (tests, A/B).
+    void use_uniform_sizes(bool on) {
+        use_uniform_ = on;
+        if (!on) {
+            same_radius_ = 0.0;
+            same_mass_ = 0.0;
+        }
+    }
     /// Steps whose pair filter took the inner list, and particles found loose (their entries added
     /// to it), since construction (not saved in checkpoints; for tests and A/B).
     [[nodiscard]] long inner_list_steps() const { return inner_steps_; }
@@ -258,6 +268,10 @@ class System {
     // that stopped touching only; all bits set after a list build or a restart (unknown).
     std::vector<std::uint8_t> touched_;
     std::vector<double> entry_rsum2_; // (r_i + r_j)^2 of each list entry (m^2), set at each build
+    // The radius (m) and mass (kg) of every particle when all have the same, else 0; set at each
+    // build (radii and masses do not change between builds).
+    double same_radius_ = 0.0;
+    double same_mass_ = 0.0;
     // Inner list of the four-entry filter (two-level Verlet list, docs/architecture.md "Inner
     // list"): per pair chunk, the list entries whose gap |x_i - x_j| - (r_i + r_j) was below
     // inner_gap_ at the positions of the filter pass that built it, and every entry of a particle
@@ -280,6 +294,7 @@ class System {
     bool inner_valid_ = false;    // the inner lists hold every entry that can touch
     bool inner_used_ = false;     // the last filter ran on the inner lists (touched_ is stale)
     bool use_inner_ = true;       // use_inner_list()
+    bool use_uniform_ = true;     // use_uniform_sizes()
     std::size_t inner_loose_ = 0; // loose particles since the inner build
     long inner_next_build_ = 0;   // no inner build before this step (after dropping them)
     static constexpr long inner_holdoff = 200;              // steps
