@@ -38,7 +38,7 @@ struct BodyOf {
 } // namespace
 
 DepositTemplate make_deposit_template(const geometry::ShapeTemplate& t) {
-    return {std::visit(BodyOf{}, t.shape), t.volume};
+    return {std::visit(BodyOf{}, t.shape), t.volume, t.bounding_radius()};
 }
 
 Aabb world_box(const DepositBody& b, const Vec3& x, const Mat3& r) {

@@ -68,6 +68,7 @@ using DepositBody = std::variant<SphereBody, PlanesBody, SuperquadricBody, Clump
 struct DepositTemplate {
     DepositBody body;    ///< inside test, body frame
     double volume = 0.0; ///< the template's true volume (m^3): deposited when no sub-cell fits
+    double bounding_radius = 0.0; ///< radius of a centred sphere enclosing the body (m)
 };
 
 /// Prepares a template (any shape of geometry::Shape) for deposition; the volume is the

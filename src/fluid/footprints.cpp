@@ -209,23 +209,34 @@ void scan_sphere(const TransferGrid& g, const SphereBody& s, const Vec3& x, cons
     }
 }
 
-// Runs of any body with an inside test: every sub-cell of the range, in the body frame.
+// Runs of any body with an inside test: every sub-cell of the range that lies in the body's
+// bounding sphere (radius rb) is tested in the body frame.
 template <class Body>
-void scan_body(const TransferGrid& g, const Body& body, const Vec3& x, const Mat3& rot,
+void scan_body(const TransferGrid& g, const Body& body, double rb, const Vec3& x, const Mat3& rot,
                const SubRange& r, Scan& scan) {
     const double h = g.sub_cell_size();
     const Vec3& o = g.origin();
     const Mat3 rt = rot.transpose();
     const Vec3 step = h * rt.col(0); // one sub-cell along world x, in the body frame
     for (long c = r.lo[2]; c <= r.hi[2]; ++c) {
+        const double dz = o.z() + (static_cast<double>(c) + 0.5) * h - x.z();
         for (long b = r.lo[1]; b <= r.hi[1]; ++b) {
+            const double dy = o.y() + (static_cast<double>(b) + 0.5) * h - x.y();
+            const double w2 = rb * rb - dy * dy - dz * dz;
+            if (w2 < 0.0) {
+                continue;
+            }
+            const double w = std::sqrt(w2);
+            const auto lo = static_cast<long>(
+                std::max(std::ceil((x.x() - w - o.x()) / h - 0.5), static_cast<double>(r.lo[0])));
+            const auto hi = static_cast<long>(
+                std::min(std::floor((x.x() + w - o.x()) / h - 0.5), static_cast<double>(r.hi[0])));
             const Vec3 start =
-                o + h * Vec3(static_cast<double>(r.lo[0]) + 0.5, static_cast<double>(b) + 0.5,
-                             static_cast<double>(c) + 0.5);
+                Vec3(o.x() + (static_cast<double>(lo) + 0.5) * h, dy + x.y(), dz + x.z());
             const Vec3 p0 = rt * (start - x);
             long run = -1;
-            for (long a = r.lo[0]; a <= r.hi[0]; ++a) {
-                const bool in = body.contains(p0 + static_cast<double>(a - r.lo[0]) * step);
+            for (long a = lo; a <= hi; ++a) {
+                const bool in = body.contains(p0 + static_cast<double>(a - lo) * step);
                 if (in && run < 0) {
                     run = a;
                 } else if (!in && run >= 0) {
@@ -234,7 +245,7 @@ void scan_body(const TransferGrid& g, const Body& body, const Vec3& x, const Mat
                 }
             }
             if (run >= 0) {
-                scan.add_run(run, r.hi[0], b, c);
+                scan.add_run(run, hi, b, c);
             }
         }
     }
@@ -282,7 +293,7 @@ ParticleResult deposit_one(const TransferGrid& g, const DepositTemplate& t, cons
             std::visit(
                 [&](const auto& body) {
                     if constexpr (!std::is_same_v<std::decay_t<decltype(body)>, SphereBody>) {
-                        scan_body(g, body, x, rot, range, scan);
+                        scan_body(g, body, t.bounding_radius, x, rot, range, scan);
                     }
                 },
                 t.body);
