@@ -92,6 +92,8 @@ class Scan {
 
     // Sub-cells a0..a1 (x) of the row (b, c).
     void add_run(long a0, long a1, long b, long c);
+    // x weights of sub-cells p..q of fluid cell cx, all below (lower) or all from its centre up.
+    void add_row_weights(int cx, long p, long q, bool lower);
     // Writes the deposit and stencil entries (and clears the local box); returns the sub-cells.
     std::int64_t emit(double sub_volume);
     // Mean sub-cell centre (m, world frame); total() > 0.
@@ -116,6 +118,23 @@ class Scan {
     Vec3 sum_ = Vec3::Zero(); // sum of sub-cell indices, per axis
 };
 
+// Adds the x weights of sub-cells r = p..q (within fluid cell cx) to the row: each splits between
+// the two cell centres around it, u = (r + 1/2) / s - 1/2 in cell units from the centre of cx.
+// Below the centre (2 r + 1 < s) the pair is (cx - 1, cx), from it up (cx, cx + 1); a neighbour
+// beyond the grid passes its share to cx.
+void Scan::add_row_weights(int cx, long p, long q, bool lower) {
+    const int s = g_.refinement();
+    const auto m = static_cast<double>(q - p + 1);
+    const double su = m * (static_cast<double>(p + q + 1) / (2.0 * s) - 0.5); // sum of u
+    const int other = lower ? cx - 1 : cx + 1;
+    const double w_other = lower ? -su : su;
+    const bool outside = other < 0 || other >= g_.cells()[0];
+    buf_.row[cx - lo_[0]] += outside ? m : m - w_other;
+    if (!outside) {
+        buf_.row[other - lo_[0]] += w_other;
+    }
+}
+
 void Scan::add_run(long a0, long a1, long b, long c) {
     const int s = g_.refinement();
     const auto n = a1 - a0 + 1;
@@ -124,34 +143,35 @@ void Scan::add_run(long a0, long a1, long b, long c) {
                                           static_cast<double>(b), static_cast<double>(c));
     const auto cy = static_cast<int>(b / s);
     const auto cz = static_cast<int>(c / s);
+    const long half = s / 2; // sub-cells r < half lie below their cell's centre
     for (auto cx = static_cast<int>(a0 / s); cx <= static_cast<int>(a1 / s); ++cx) {
-        const long first = std::max(a0, static_cast<long>(cx) * s);
-        const long last = std::min(a1, static_cast<long>(cx + 1) * s - 1);
+        const long base = static_cast<long>(cx) * s;
+        const long first = std::max(a0, base) - base;
+        const long last = std::min(a1, base + s - 1) - base;
         buf_.count[local(cx, cy, cz)] += last - first + 1;
+        if (first < half) {
+            add_row_weights(cx, first, std::min(last, half - 1), true);
+        }
+        if (last >= half) {
+            add_row_weights(cx, std::max(first, half), last, false);
+        }
     }
-    // Interpolation stencil: x weights of the run, then spread over the 2 x 2 (y, z) neighbours.
-    const int nx = g_.cells()[0];
-    int xmin = nx;
-    int xmax = -1;
-    for (long a = a0; a <= a1; ++a) {
-        const AxisWeights w = axis_weights(sub_u(a, s), nx);
-        buf_.row[w.c0 - lo_[0]] += w.w0;
-        buf_.row[w.c1 - lo_[0]] += w.w1;
-        xmin = std::min(xmin, w.c0);
-        xmax = std::max(xmax, w.c1);
-    }
+    // Interpolation stencil: the row's x weights spread over the 2 x 2 (y, z) neighbours.
+    const int xmin = std::max(lo_[0], static_cast<int>(a0 / s) - 1);
+    const int xmax = std::min(g_.cells()[0] - 1, static_cast<int>(a1 / s) + 1);
     const AxisWeights wy = axis_weights(sub_u(b, s), g_.cells()[1]);
     const AxisWeights wz = axis_weights(sub_u(c, s), g_.cells()[2]);
     const std::array<std::pair<int, double>, 2> ys{{{wy.c0, wy.w0}, {wy.c1, wy.w1}}};
     const std::array<std::pair<int, double>, 2> zs{{{wz.c0, wz.w0}, {wz.c1, wz.w1}}};
+    const double* row = &buf_.row[xmin - lo_[0]];
     for (const auto& [k, wk] : zs) {
         for (const auto& [j, wj] : ys) {
             if (wj * wk == 0.0) {
                 continue;
             }
             double* out = &buf_.stencil[local(xmin, j, k)];
-            for (int i = xmin; i <= xmax; ++i) {
-                out[i - xmin] += wj * wk * buf_.row[i - lo_[0]];
+            for (int i = 0; i <= xmax - xmin; ++i) {
+                out[i] += wj * wk * row[i];
             }
         }
     }
