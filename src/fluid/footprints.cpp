@@ -301,6 +301,7 @@ struct ParticleResult {
 
 ParticleResult deposit_one(const TransferGrid& g, const DepositTemplate& t, const Vec3& x,
                            const Quat& q, detail::ChunkBuffer& buf) {
+    KILN_ASSERT(x.allFinite() && q.coeffs().allFinite());
     const Mat3 rot = geometry::rotation_matrix(q);
     const SubRange range = sub_range(g, world_box(t.body, x, rot));
     std::int64_t n = 0;
