@@ -1,9 +1,12 @@
 #include "fluid/deposit_body.hpp"
 
 #include <cmath>
+#include <limits>
 
 namespace kiln::fluid {
 namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Distinct face planes of a convex polyhedron: coplanar triangles (a cube's two per face) give
 // one plane, so the inside test makes one comparison per face.
@@ -54,7 +57,7 @@ Aabb world_box(const DepositBody& b, const Vec3& x, const Mat3& r) {
             return {x - e, x + e};
         }
         Aabb operator()(const PlanesBody& p) const {
-            Aabb out{Vec3::Constant(INFINITY), Vec3::Constant(-INFINITY)};
+            Aabb out{Vec3::Constant(kInf), Vec3::Constant(-kInf)};
             for (const Vec3& v : p.vertices) {
                 const Vec3 w = r * v;
                 out.lo = out.lo.cwiseMin(w);
@@ -63,7 +66,7 @@ Aabb world_box(const DepositBody& b, const Vec3& x, const Mat3& r) {
             return {x + out.lo, x + out.hi};
         }
         Aabb operator()(const ClumpBody& c) const {
-            Aabb out{Vec3::Constant(INFINITY), Vec3::Constant(-INFINITY)};
+            Aabb out{Vec3::Constant(kInf), Vec3::Constant(-kInf)};
             for (const auto& s : c.spheres) {
                 const Vec3 w = r * s.centre;
                 out.lo = out.lo.cwiseMin(w - Vec3::Constant(s.radius));
