@@ -564,9 +564,10 @@ PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b,
 
 /// The edge-edge stage over the kept edges r.edges_a x r.edges_b (arcs set): raises best (the
 /// largest separation, m) and sets best_m (A's frame, from B to A) and c.feature when an edge pair
-/// spanning a face of the Minkowski difference gives a larger one.
+/// spanning a face of the Minkowski difference gives a larger one; `second` (m) is raised to the
+/// largest of the other values met (the runner-up, for the memory's tie test).
 void edge_stage(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const Relative& r,
-                double& best, Vec3& best_m, PolyhedronContact& c) {
+                double& best, Vec3& best_m, PolyhedronContact& c, double& second) {
     for (const int ia : r.edges_a) {
         const auto& ea = fa.edges[static_cast<std::size_t>(ia)];
         const Vec3& na0 = fa.face_normals[static_cast<std::size_t>(ea[2])];
@@ -595,9 +596,12 @@ void edge_stage(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, cons
             }
             const double sep = n.dot(pb - pa);
             if (sep > best) {
+                second = best;
                 best = sep;
                 best_m = -n;
                 c.feature = CommonPlaneFeature::kEdgeEdge;
+            } else {
+                second = std::max(second, sep);
             }
         }
     }
@@ -688,33 +692,220 @@ bool edge_crosses(const std::vector<std::array<int, 4>>& edges, const std::vecto
     return false;
 }
 
+/// Tolerance of the memory's bounds and tests, relative to the sum of the bounding radii (-):
+/// far above the round-off of the distances (1e-16 relative) and of the stored values, far below
+/// any overlap the law acts on. Bounds are widened by it, ties within it and overlaps or
+/// certificates thinner than it go to the full search.
+constexpr double kMemoTolerance = 1e-9;
+
+/// Relative motion (relative to the sum of the bounding radii) beyond which the memory is not
+/// read and the full search refills it: the bounds widen with the motion, so a memory far from
+/// the pose rules out little. A choice of speed only; the answer does not depend on it.
+constexpr double kMemoDrift = 0.01;
+
+thread_local PlaneMemoCounters memo_counters;
+
+/// Refills the memory at the pose of r (make_relative and relative_faces done) from complete
+/// tables of distances, for a touching answer `best` (m, < 0), with the vertex deepest inside the
+/// other body as the certificate to try first (none: -1).
+void refill_memo(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const Relative& r,
+                 double best, PlaneMemo& memo) {
+    ++memo_counters.refills;
+    thread_local std::vector<double> dist_b; // B's vertices beyond A's planes
+    thread_local std::vector<double> dist_a; // A's vertices beyond B's planes
+    face_distances(fa.face_normals, fa.face_offsets, r.vb, dist_b, memo.face_a);
+    face_distances(r.nb, r.ob, fa.vertices, dist_a, memo.face_b);
+    const auto edge_reach = [](const std::vector<std::array<int, 4>>& edges,
+                               const std::vector<double>& dist, std::size_t nf,
+                               std::vector<double>& out) {
+        out.resize(edges.size());
+        for (std::size_t e = 0; e < edges.size(); ++e) {
+            const double* d0 = dist.data() + static_cast<std::size_t>(edges[e][0]) * nf;
+            const double* d1 = dist.data() + static_cast<std::size_t>(edges[e][1]) * nf;
+            double m = -std::numeric_limits<double>::infinity();
+            for (std::size_t k = 0; k < nf; ++k) {
+                m = std::max(m, std::min(d0[k], d1[k]));
+            }
+            out[e] = m;
+        }
+    };
+    const std::size_t nfa = fa.face_normals.size();
+    const std::size_t nfb = fb.face_normals.size();
+    edge_reach(fa.edges, dist_a, nfb, memo.edge_a);
+    edge_reach(fb.edges, dist_b, nfa, memo.edge_b);
+    // The vertex deepest inside the other body (smallest largest distance), B's first.
+    const double tol = kMemoTolerance * (fa.radius + fb.radius);
+    double deepest = -tol;
+    memo.inside = -1;
+    const auto scan = [&](const std::vector<double>& dist, std::size_t nf, std::size_t nv,
+                          int base) {
+        for (std::size_t i = 0; i < nv; ++i) {
+            const double* d = dist.data() + i * nf;
+            const double top = *std::max_element(d, d + nf);
+            if (top < deepest) {
+                deepest = top;
+                memo.inside = base + static_cast<int>(i);
+            }
+        }
+    };
+    scan(dist_b, nfa, r.vb.size(), 0);
+    scan(dist_a, nfb, fa.vertices.size(), static_cast<int>(r.vb.size()));
+    memo.valid = true;
+    memo.fa = &fa;
+    memo.fb = &fb;
+    memo.rot = r.rot;
+    memo.shift = r.shift;
+    memo.shift_in_b = r.rot.transpose() * r.shift;
+    memo.answer = best;
+}
+
+/// Is the memory's certificate vertex still inside the other body by more than tol (m)? (B's
+/// planes in r: relative_faces done; -1: no vertex.)
+bool memo_inside(const PolyhedronFeatures& fa, const Relative& r, int vertex, double tol) {
+    const auto nvb = static_cast<int>(r.vb.size());
+    if (vertex < 0) {
+        return false;
+    }
+    if (vertex < nvb) {
+        const Vec3 x = r.vb[static_cast<std::size_t>(vertex)];
+        for (std::size_t k = 0; k < fa.face_normals.size(); ++k) {
+            if (!(fa.face_normals[k].dot(x) - fa.face_offsets[k] < -tol)) {
+                return false;
+            }
+        }
+        return true;
+    }
+    const Vec3 x = fa.vertices[static_cast<std::size_t>(vertex - nvb)];
+    for (std::size_t k = 0; k < r.nb.size(); ++k) {
+        if (!(r.nb[k].dot(x) - r.ob[k] < -tol)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+/// The common plane from the memory (see PlaneMemo), after make_relative: true with best, best_m
+/// (A's frame), c.feature and the prune's lists in r set as the full search sets them, when the
+/// bounds single out the answer; false (c and r to be reset) when the full search must run.
+///
+/// Why it is the full search's answer: a vertex of one body moves relative to the other by at
+/// most drift = |dR| r + |ds| (the change of the relative rotation in the Frobenius norm, which
+/// bounds the spectral one, times the bounding radius, plus the change of the centre's position),
+/// so every separation along a face and every distance beyond a plane moves by at most the drift,
+/// and the largest separation of all (the answer) too. A face whose stored separation plus the
+/// drift lies below a lower bound of the answer cannot win nor tie and is not evaluated; an edge
+/// whose stored distance beyond one plane minus the drift exceeds the prune's reach is one the full
+/// prune drops as well (the reach here is at least the full search's: its best face is at most
+/// the full search's). So the candidates evaluated include all the full search evaluates that can
+/// come near the answer, by the same expressions; the answer is kept only when it beats every
+/// other value met by the tolerance and a vertex lies inside the other body (then the full search
+/// has its certificate of overlap and takes no other path).
+bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Relative& r,
+                 const PlaneMemo& memo, double& best, Vec3& best_m, PolyhedronContact& c) {
+    if (!memo.valid || memo.fa != &fa || memo.fb != &fb) {
+        return false;
+    }
+    ++memo_counters.tried;
+    const double scale = fa.radius + fb.radius;
+    const double tol = kMemoTolerance * scale;
+    const double turn = (r.rot - memo.rot).norm();
+    const double drift_b = turn * fb.radius + (r.shift - memo.shift).norm();
+    const double drift_a =
+        turn * fa.radius + (r.rot.transpose() * r.shift - memo.shift_in_b).norm();
+    if (!(std::max(drift_a, drift_b) <= kMemoDrift * scale)) {
+        return false;
+    }
+    const double floor = memo.answer - std::min(drift_a, drift_b) - tol; // <= the answer
+    thread_local std::vector<double> sep;
+    thread_local std::vector<double> bound;
+    double second = -std::numeric_limits<double>::infinity();
+    const std::size_t nfa = fa.face_normals.size();
+    const std::size_t nfb = fb.face_normals.size();
+    // Faces of A: a face is evaluated unless its bound (stored value, drift, round-off of the
+    // stored value, and the tie margin) lies below the running lower bound of the answer.
+    PlaneDistances tb(fa.face_normals, fa.face_offsets, r.vb, r.dist_b);
+    bound.resize(nfa);
+    for (std::size_t k = 0; k < nfa; ++k) {
+        bound[k] = memo.face_a[k] + drift_b + 2.0 * tol;
+    }
+    face_separations(tb, bound, floor, sep);
+    for (std::size_t k = 0; k < nfa; ++k) {
+        ++c.iterations;
+        if (sep[k] > best) {
+            second = best;
+            best = sep[k];
+            best_m = -fa.face_normals[k];
+            c.feature = CommonPlaneFeature::kFaceOfA;
+        } else {
+            second = std::max(second, sep[k]);
+        }
+    }
+    if (!(best < -tol)) {
+        return false;
+    }
+    relative_faces(fb, r);
+    PlaneDistances ta(r.nb, r.ob, fa.vertices, r.dist_a);
+    bound.resize(nfb);
+    for (std::size_t k = 0; k < nfb; ++k) {
+        bound[k] = memo.face_b[k] + drift_a + 2.0 * tol;
+    }
+    face_separations(ta, bound, std::max(floor, best), sep);
+    for (std::size_t k = 0; k < nfb; ++k) {
+        ++c.iterations;
+        if (sep[k] > best) {
+            second = best;
+            best = sep[k];
+            best_m = r.nb[k];
+            c.feature = CommonPlaneFeature::kFaceOfB;
+        } else {
+            second = std::max(second, sep[k]);
+        }
+    }
+    if (!(best < -tol)) {
+        return false;
+    }
+    // The prune from the stored distances (the full search's reach expression).
+    const double reach = -best + 1e-9 * (fa.radius + fb.radius);
+    const auto keep = [&](const std::vector<double>& stored, double drift, std::vector<int>& kept) {
+        kept.clear();
+        for (std::size_t e = 0; e < stored.size(); ++e) {
+            if (!(stored[e] - drift - tol > reach)) {
+                kept.push_back(static_cast<int>(e));
+            }
+        }
+    };
+    keep(memo.edge_a, drift_a, r.edges_a);
+    keep(memo.edge_b, drift_b, r.edges_b);
+    r.pruned = true;
+    relative_arcs(fb, r);
+    edge_stage(fa, fb, r, best, best_m, c, second);
+    if (!(best < -tol) || !(second < best - tol)) {
+        return false;
+    }
+    // The certificate of overlap: the stored vertex, else a kept edge crossing the other body
+    // (edge_crosses as the full search calls it: a crossing edge passes within the reach of the
+    // other body, so the full prune keeps it too, and the same expression gives the same answer).
+    if (!memo_inside(fa, r, memo.inside, tol) &&
+        !edge_crosses(fa.edges, r.edges_a, fa.vertices, r.nb, r.ob) &&
+        !edge_crosses(fb.edges, r.edges_b, r.vb, fa.face_normals, fa.face_offsets)) {
+        return false;
+    }
+    ++memo_counters.answered;
+    return true;
+}
+
 } // namespace
 
 namespace {
 
-/// The fast common plane; the patch as `with_patch` says, or (with `need_patch`) as it decides.
+/// The full search of the fast common plane (after make_relative): sets best (the largest
+/// separation, m), best_m (A's frame, from B to A), c.feature and c.iterations, and the prune's
+/// lists in r. False when a separating direction proved the pair apart: c is then the answer.
 /// `scan`: which face stages (see detail::FaceScan).
-PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& b, bool with_patch,
-                               const PatchTest* need_patch, detail::FaceScan scan) {
-    PolyhedronContact c;
+bool full_search(const PosedPolyhedron& a, const PosedPolyhedron& b, detail::FaceScan scan,
+                 Relative& r, double& best, Vec3& best_m, PolyhedronContact& c) {
     const PolyhedronFeatures& fa = *a.shape;
     const PolyhedronFeatures& fb = *b.shape;
-    const double dist = (b.x - a.x).norm();
-    if (!std::isfinite(dist) || !std::isfinite(a.q.norm()) || !std::isfinite(b.q.norm())) {
-        c.converged = false;
-        return c;
-    }
-    if (dist > fa.radius + fb.radius) {
-        c.depth = fa.radius + fb.radius - dist;
-        return c;
-    }
-    thread_local Relative r;
-    make_relative(a, b, r);
-
-    // Largest separation (smallest overlap) over the candidate planes, in A's frame. m is the
-    // normal from B to A.
-    double best = -std::numeric_limits<double>::infinity();
-    Vec3 best_m = Vec3::UnitX();
     const std::size_t nfa = fa.face_normals.size();
     const std::size_t nfb = fb.face_normals.size();
     thread_local std::vector<double> sep;
@@ -724,16 +915,16 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
     // plane's scan is long and a vertex's row short: bodies with more vertices than faces, in a
     // table too large for the bookkeeping to vanish in (measured, docs/performance.md,
     // "Polyhedron search with bounded face stages (session 12)": 1.3x for `cylinder_16` pairs,
-    // 1.05x for `cylinder_8`; icosahedra, 12 vertices and 20 faces, and cubes, a table of 96, do
-    // not gain). Others take the full tables: every vertex against every face plane, vertex by
-    // vertex, the inside-vertex certificates in the same pass. Same answer, bit for bit.
+    // 1.05x for `cylinder_8`; icosahedra, 12 vertices and 20 faces, and cubes, a table of 96,
+    // do not gain). Others take the full tables: every vertex against every face plane, vertex
+    // by vertex, the inside-vertex certificates in the same pass. Same answer, bit for bit.
     const std::size_t nva = fa.vertices.size();
     const std::size_t nvb = r.vb.size();
     const bool bounded = scan == detail::FaceScan::bounded ||
                          (scan == detail::FaceScan::automatic && nva + nvb > nfa + nfb &&
                           nfa * nvb + nfb * nva >= kBoundedTableEntries);
-    // Upper bounds of the face separations (m), so that a face that cannot be the largest is not
-    // scanned: the smallest distance of B's vertices beyond A's face plane k is at most the
+    // Upper bounds of the face separations (m), so that a face that cannot be the largest is
+    // not scanned: the smallest distance of B's vertices beyond A's face plane k is at most the
     // distance of any point of B's hull, e.g. of c_B - rho_B n_k with c_B B's centre and rho_B
     // its inscribed radius (the ball of radius rho_B about the centre lies inside every face
     // plane): n_k . c_B - o_k - rho_B; for B's face k (in A's frame) and A's vertices,
@@ -793,12 +984,12 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
     }
     if (best <= 0.0) {
         // Exact prune of the edge stage. If the deepest plane is an edge-edge one with overlap
-        // d* < D = -best, the origin's nearest point on the Minkowski difference lies on the face
-        // spanned by the two edges, i.e. points of the two edges are d* apart: each edge passes
-        // within D of the other body. An edge farther than D from the other body's bounding
-        // sphere, or whose two ends lie beyond one face plane of the other body by more than D,
-        // is farther than D from that body and cannot carry the optimum, so it is dropped
-        // (slack: 1e-9 of the size against round-off).
+        // d* < D = -best, the origin's nearest point on the Minkowski difference lies on the
+        // face spanned by the two edges, i.e. points of the two edges are d* apart: each edge
+        // passes within D of the other body. An edge farther than D from the other body's
+        // bounding sphere, or whose two ends lie beyond one face plane of the other body by
+        // more than D, is farther than D from that body and cannot carry the optimum, so it is
+        // dropped (slack: 1e-9 of the size against round-off).
         const double reach = -best + 1e-9 * (fa.radius + fb.radius);
         if (bounded) {
             keep_edges(fa.edges, *ta, reach, r.shift, fb.radius, r.edges_a);
@@ -811,16 +1002,17 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
         }
         r.pruned = true;
         relative_arcs(fb, r);
-        edge_stage(fa, fb, r, best, best_m, c);
+        double second = -std::numeric_limits<double>::infinity(); // not read here
+        edge_stage(fa, fb, r, best, best_m, c, second);
         // The prune's argument needs overlapping bodies: when they are apart, the separating
         // edge pair may lie farther apart than D and be dropped, and the search would report a
         // contact that is not there (found by a random-pose test against
         // find_separating_direction). So a "touching" answer of a pruned search is kept only
         // with a certificate of overlap: a vertex of one body inside the other (the distances
-        // beyond the face planes, computed here where not yet) or a kept edge crossing the other
-        // body. Otherwise a separating direction is
-        // searched, and without one the edge stage runs again over every edge pair (the search
-        // before the prune, exact in both cases).
+        // beyond the face planes, computed here where not yet) or a kept edge crossing the
+        // other body. Otherwise a separating direction is searched, and without one the edge
+        // stage runs again over every edge pair (the search before the prune, exact in both
+        // cases).
         const bool pruned_some =
             r.edges_a.size() < fa.edges.size() || r.edges_b.size() < fb.edges.size();
         const auto inside = [&] {
@@ -833,14 +1025,59 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
             if (find_separating_direction(a, b, 1e-12 * (fa.radius + fb.radius), m)) {
                 c.depth = overlap_along(a, b, m);
                 c.normal = m;
-                return c;
+                return false;
             }
             r.edges_a.resize(fa.edges.size());
             std::iota(r.edges_a.begin(), r.edges_a.end(), 0);
             r.edges_b.resize(fb.edges.size());
             std::iota(r.edges_b.begin(), r.edges_b.end(), 0);
             relative_arcs(fb, r);
-            edge_stage(fa, fb, r, best, best_m, c);
+            edge_stage(fa, fb, r, best, best_m, c, second);
+        }
+    }
+    return true;
+}
+
+/// The fast common plane; the patch as `with_patch` says, or (with `need_patch`) as it decides.
+/// `scan`: which face stages (see detail::FaceScan).
+PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& b, bool with_patch,
+                               const PatchTest* need_patch, detail::FaceScan scan,
+                               PlaneMemo* memo = nullptr) {
+    PolyhedronContact c;
+    const PolyhedronFeatures& fa = *a.shape;
+    const PolyhedronFeatures& fb = *b.shape;
+    const double dist = (b.x - a.x).norm();
+    if (!std::isfinite(dist) || !std::isfinite(a.q.norm()) || !std::isfinite(b.q.norm())) {
+        c.converged = false;
+        return c;
+    }
+    if (dist > fa.radius + fb.radius) {
+        c.depth = fa.radius + fb.radius - dist;
+        return c;
+    }
+    thread_local Relative r;
+    make_relative(a, b, r);
+
+    // Largest separation (smallest overlap) over the candidate planes, in A's frame. m is the
+    // normal from B to A.
+    double best = -std::numeric_limits<double>::infinity();
+    Vec3 best_m = Vec3::UnitX();
+    // A resting pair's memory first (same answer); the full search when it cannot tell.
+    const bool from_memo = memo != nullptr && memo_search(fa, fb, r, *memo, best, best_m, c);
+    if (memo != nullptr && !from_memo) {
+        c = PolyhedronContact{};
+        best = -std::numeric_limits<double>::infinity();
+        best_m = Vec3::UnitX();
+        r.pruned = false;
+    }
+    if (!from_memo && !full_search(a, b, scan, r, best, best_m, c)) {
+        return c; // apart along a searched direction
+    }
+    if (memo != nullptr && !from_memo) {
+        if (best < 0.0) {
+            refill_memo(fa, fb, r, best, *memo);
+        } else {
+            memo->valid = false;
         }
     }
     if (best > 0.0) {
@@ -899,6 +1136,15 @@ PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhe
 PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b,
                                      const PatchTest& need_patch) {
     return common_plane(a, b, true, &need_patch, detail::FaceScan::automatic);
+}
+
+PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b,
+                                     const PatchTest& need_patch, PlaneMemo& memo) {
+    return common_plane(a, b, true, &need_patch, detail::FaceScan::automatic, &memo);
+}
+
+PlaneMemoCounters& plane_memo_counters() {
+    return memo_counters;
 }
 
 namespace detail {
