@@ -715,14 +715,19 @@ void refill_memo(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, con
     thread_local std::vector<double> dist_a; // A's vertices beyond B's planes
     face_distances(fa.face_normals, fa.face_offsets, r.vb, dist_b, memo.face_a);
     face_distances(r.nb, r.ob, fa.vertices, dist_a, memo.face_b);
+    // Per edge, the larger of the prune's two distances: beyond one face plane of the other body
+    // (the larger over the planes of the nearer end's distance), and beyond its bounding sphere.
     const auto edge_reach = [](const std::vector<std::array<int, 4>>& edges,
-                               const std::vector<double>& dist, std::size_t nf,
+                               const std::vector<Vec3>& v, const std::vector<double>& dist,
+                               std::size_t nf, const Vec3& centre, double radius,
                                std::vector<double>& out) {
         out.resize(edges.size());
         for (std::size_t e = 0; e < edges.size(); ++e) {
-            const double* d0 = dist.data() + static_cast<std::size_t>(edges[e][0]) * nf;
-            const double* d1 = dist.data() + static_cast<std::size_t>(edges[e][1]) * nf;
-            double m = -std::numeric_limits<double>::infinity();
+            const auto i0 = static_cast<std::size_t>(edges[e][0]);
+            const auto i1 = static_cast<std::size_t>(edges[e][1]);
+            const double* d0 = dist.data() + i0 * nf;
+            const double* d1 = dist.data() + i1 * nf;
+            double m = std::sqrt(segment_point_distance2(v[i0], v[i1], centre)) - radius;
             for (std::size_t k = 0; k < nf; ++k) {
                 m = std::max(m, std::min(d0[k], d1[k]));
             }
@@ -731,8 +736,8 @@ void refill_memo(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, con
     };
     const std::size_t nfa = fa.face_normals.size();
     const std::size_t nfb = fb.face_normals.size();
-    edge_reach(fa.edges, dist_a, nfb, memo.edge_a);
-    edge_reach(fb.edges, dist_b, nfa, memo.edge_b);
+    edge_reach(fa.edges, fa.vertices, dist_a, nfb, r.shift, fb.radius, memo.edge_a);
+    edge_reach(fb.edges, r.vb, dist_b, nfa, Vec3::Zero(), fa.radius, memo.edge_b);
     // The vertex deepest inside the other body (smallest largest distance), B's first.
     const double tol = kMemoTolerance * (fa.radius + fb.radius);
     double deepest = -tol;

@@ -152,9 +152,10 @@ struct PlaneMemo {
     double answer = 0.0;                    ///< largest separation (m, < 0: overlap), stored pose
     std::vector<double> face_a;             ///< separation along each face of A (m)
     std::vector<double> face_b;             ///< separation along each face of B (m)
-    std::vector<double>
-        edge_a; ///< per feature edge of A: max over B's planes of min end distance (m)
-    std::vector<double> edge_b; ///< per feature edge of B: the same against A's planes (m)
+    /// Per feature edge of A, a lower bound of its distance from B (m): the larger of its distance
+    /// beyond one of B's face planes (both ends) and beyond B's bounding sphere.
+    std::vector<double> edge_a;
+    std::vector<double> edge_b; ///< the same for B's feature edges and A (m)
     int inside = -1; ///< a vertex strictly inside the other body: B's j as j, A's i as nv_B + i
 };
 
