@@ -713,15 +713,20 @@ void refill_memo(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, con
     ++memo_counters.refills;
     thread_local std::vector<double> dist_b; // B's vertices beyond A's planes
     thread_local std::vector<double> dist_a; // A's vertices beyond B's planes
-    face_distances(fa.face_normals, fa.face_offsets, r.vb, dist_b, memo.face_a);
-    face_distances(r.nb, r.ob, fa.vertices, dist_a, memo.face_b);
+    thread_local std::vector<double> sep_a;  // separations along A's faces
+    thread_local std::vector<double> sep_b;
+    face_distances(fa.face_normals, fa.face_offsets, r.vb, dist_b, sep_a);
+    face_distances(r.nb, r.ob, fa.vertices, dist_a, sep_b);
+    const std::size_t nfa = fa.face_normals.size();
+    const std::size_t nfb = fb.face_normals.size();
+    memo.values.resize(nfa + nfb + fa.edges.size() + fb.edges.size());
+    std::copy(sep_a.begin(), sep_a.end(), memo.values.begin());
+    std::copy(sep_b.begin(), sep_b.end(), memo.values.begin() + static_cast<std::ptrdiff_t>(nfa));
     // Per edge, the larger of the prune's two distances: beyond one face plane of the other body
     // (the larger over the planes of the nearer end's distance), and beyond its bounding sphere.
     const auto edge_reach = [](const std::vector<std::array<int, 4>>& edges,
                                const std::vector<Vec3>& v, const std::vector<double>& dist,
-                               std::size_t nf, const Vec3& centre, double radius,
-                               std::vector<double>& out) {
-        out.resize(edges.size());
+                               std::size_t nf, const Vec3& centre, double radius, double* out) {
         for (std::size_t e = 0; e < edges.size(); ++e) {
             const auto i0 = static_cast<std::size_t>(edges[e][0]);
             const auto i1 = static_cast<std::size_t>(edges[e][1]);
@@ -734,10 +739,10 @@ void refill_memo(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, con
             out[e] = m;
         }
     };
-    const std::size_t nfa = fa.face_normals.size();
-    const std::size_t nfb = fb.face_normals.size();
-    edge_reach(fa.edges, fa.vertices, dist_a, nfb, r.shift, fb.radius, memo.edge_a);
-    edge_reach(fb.edges, r.vb, dist_b, nfa, Vec3::Zero(), fa.radius, memo.edge_b);
+    double* stored_edges = memo.values.data() + nfa + nfb;
+    edge_reach(fa.edges, fa.vertices, dist_a, nfb, r.shift, fb.radius, stored_edges);
+    edge_reach(fb.edges, r.vb, dist_b, nfa, Vec3::Zero(), fa.radius,
+               stored_edges + fa.edges.size());
     // The vertex deepest inside the other body (smallest largest distance), B's first.
     const double tol = kMemoTolerance * (fa.radius + fb.radius);
     double deepest = -tol;
@@ -831,7 +836,7 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
     PlaneDistances tb(fa.face_normals, fa.face_offsets, r.vb, r.dist_b);
     bound.resize(nfa);
     for (std::size_t k = 0; k < nfa; ++k) {
-        bound[k] = memo.face_a[k] + drift_b + 2.0 * tol;
+        bound[k] = memo.values[k] + drift_b + 2.0 * tol;
     }
     face_separations(tb, bound, floor, sep);
     for (std::size_t k = 0; k < nfa; ++k) {
@@ -852,7 +857,7 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
     PlaneDistances ta(r.nb, r.ob, fa.vertices, r.dist_a);
     bound.resize(nfb);
     for (std::size_t k = 0; k < nfb; ++k) {
-        bound[k] = memo.face_b[k] + drift_a + 2.0 * tol;
+        bound[k] = memo.values[nfa + k] + drift_a + 2.0 * tol;
     }
     face_separations(ta, bound, std::max(floor, best), sep);
     for (std::size_t k = 0; k < nfb; ++k) {
@@ -871,16 +876,21 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
     }
     // The prune from the stored distances (the full search's reach expression).
     const double reach = -best + 1e-9 * (fa.radius + fb.radius);
-    const auto keep = [&](const std::vector<double>& stored, double drift, std::vector<int>& kept) {
-        kept.clear();
-        for (std::size_t e = 0; e < stored.size(); ++e) {
-            if (!(stored[e] - drift - tol > reach)) {
-                kept.push_back(static_cast<int>(e));
-            }
+    // An edge is dropped when its stored distance, less the drift and the tolerance, exceeds the
+    // reach; written without a branch (most edges are dropped, the rest in no pattern).
+    const auto keep = [](const double* stored, std::size_t n, double bar, std::vector<int>& kept) {
+        kept.resize(n);
+        int* out = kept.data();
+        std::size_t m = 0;
+        for (std::size_t e = 0; e < n; ++e) {
+            out[m] = static_cast<int>(e);
+            m += stored[e] > bar ? 0U : 1U;
         }
+        kept.resize(m);
     };
-    keep(memo.edge_a, drift_a, r.edges_a);
-    keep(memo.edge_b, drift_b, r.edges_b);
+    const double* stored_edges = memo.values.data() + nfa + nfb;
+    keep(stored_edges, fa.edges.size(), reach + drift_a + tol, r.edges_a);
+    keep(stored_edges + fa.edges.size(), fb.edges.size(), reach + drift_b + tol, r.edges_b);
     r.pruned = true;
     relative_arcs(fb, r);
     edge_stage(fa, fb, r, best, best_m, c, second);

@@ -139,8 +139,8 @@ enum class FaceScan {
 /// (translation plus rotation times the bounding radius), so the stored separations become upper
 /// bounds and the edges' stored distances beyond the other body's planes lower bounds. The search
 /// then evaluates only the faces and edges these bounds cannot rule out, and keeps its answer only
-/// when it is clear (no near tie, a vertex inside the other body): otherwise the full search runs
-/// and refills the memory. The answer is the full search's, bit for bit (the same expressions
+/// when it is clear (no near tie, a certificate of overlap): otherwise the full search runs and
+/// refills the memory. The answer is the full search's, bit for bit (the same expressions
 /// for the candidates evaluated; those ruled out lie below it by a margin).
 struct PlaneMemo {
     bool valid = false;                     ///< filled for the shapes below
@@ -150,12 +150,11 @@ struct PlaneMemo {
     Vec3 shift = Vec3::Zero();              ///< B's centre in A's frame (m), stored pose
     Vec3 shift_in_b = Vec3::Zero();         ///< rot^T shift (m): A's centre is -this in B's frame
     double answer = 0.0;                    ///< largest separation (m, < 0: overlap), stored pose
-    std::vector<double> face_a;             ///< separation along each face of A (m)
-    std::vector<double> face_b;             ///< separation along each face of B (m)
-    /// Per feature edge of A, a lower bound of its distance from B (m): the larger of its distance
-    /// beyond one of B's face planes (both ends) and beyond B's bounding sphere.
-    std::vector<double> edge_a;
-    std::vector<double> edge_b; ///< the same for B's feature edges and A (m)
+    /// Stored values (m), one block: the separation along each face of A, then of B; then per
+    /// feature edge of A, then of B, a lower bound of its distance from the other body (the larger
+    /// of its distance beyond one of the other's face planes, both ends, and beyond the other's
+    /// bounding sphere).
+    std::vector<double> values;
     int inside = -1; ///< a vertex strictly inside the other body: B's j as j, A's i as nv_B + i
 };
 
