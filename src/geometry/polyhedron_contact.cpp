@@ -152,6 +152,7 @@ struct Relative {
     DistanceTable dist_b, dist_a;
     std::vector<int> edges_a, edges_b; // feature edges kept for the edge-edge stage
     bool pruned = false;               // edges_a/edges_b are valid for this pose
+    bool full_tables = false;          // dist_b and dist_a hold every distance (full search)
 };
 
 /// B's pose and vertices in A's frame (enough for A's face stage, which rejects most near misses).
@@ -664,11 +665,12 @@ bool face_distances(const std::vector<Vec3>& n, const std::vector<double>& o,
     return inside;
 }
 
-/// Does a kept edge of one body (vertices `v`, A's frame) cross the other body (face planes n,
-/// o in A's frame), i.e. does a piece of positive length of it lie inside every face plane?
-bool edge_crosses(const std::vector<std::array<int, 4>>& edges, const std::vector<int>& kept,
-                  const std::vector<Vec3>& v, const std::vector<Vec3>& n,
-                  const std::vector<double>& o) {
+/// The first kept edge of one body (vertices `v`, A's frame) that crosses the other body (face
+/// planes n, o in A's frame), i.e. has a piece of positive length inside every face plane; -1:
+/// none.
+int edge_crosses(const std::vector<std::array<int, 4>>& edges, const std::vector<int>& kept,
+                 const std::vector<Vec3>& v, const std::vector<Vec3>& n,
+                 const std::vector<double>& o) {
     for (const int e : kept) {
         const Vec3& p0 = v[static_cast<std::size_t>(edges[static_cast<std::size_t>(e)][0])];
         const Vec3 d = v[static_cast<std::size_t>(edges[static_cast<std::size_t>(e)][1])] - p0;
@@ -686,10 +688,10 @@ bool edge_crosses(const std::vector<std::array<int, 4>>& edges, const std::vecto
             }
         }
         if (t0 < t1) {
-            return true;
+            return e;
         }
     }
-    return false;
+    return -1;
 }
 
 /// Tolerance of the memory's bounds and tests, relative to the sum of the bounding radii (-):
@@ -711,17 +713,29 @@ thread_local PlaneMemoCounters memo_counters;
 void refill_memo(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const Relative& r,
                  double best, PlaneMemo& memo) {
     ++memo_counters.refills;
-    thread_local std::vector<double> dist_b; // B's vertices beyond A's planes
-    thread_local std::vector<double> dist_a; // A's vertices beyond B's planes
-    thread_local std::vector<double> sep_a;  // separations along A's faces
-    thread_local std::vector<double> sep_b;
-    face_distances(fa.face_normals, fa.face_offsets, r.vb, dist_b, sep_a);
-    face_distances(r.nb, r.ob, fa.vertices, dist_a, sep_b);
+    // The full search's tables where it filled them all (the values are bounds: any exact
+    // evaluation serves), else tables of their own.
+    thread_local std::vector<double> own_b; // B's vertices beyond A's planes
+    thread_local std::vector<double> own_a; // A's vertices beyond B's planes
+    thread_local std::vector<double> sep;
     const std::size_t nfa = fa.face_normals.size();
     const std::size_t nfb = fb.face_normals.size();
     memo.values.resize(nfa + nfb + fa.edges.size() + fb.edges.size());
-    std::copy(sep_a.begin(), sep_a.end(), memo.values.begin());
-    std::copy(sep_b.begin(), sep_b.end(), memo.values.begin() + static_cast<std::ptrdiff_t>(nfa));
+    if (!r.full_tables) {
+        face_distances(fa.face_normals, fa.face_offsets, r.vb, own_b, sep);
+        face_distances(r.nb, r.ob, fa.vertices, own_a, sep);
+    }
+    const std::vector<double>& dist_b = r.full_tables ? r.dist_b.dist : own_b;
+    const std::vector<double>& dist_a = r.full_tables ? r.dist_a.dist : own_a;
+    // Separation along each face: the smallest distance in its column.
+    const auto columns = [](const std::vector<double>& dist, std::size_t nf, double* out) {
+        std::fill(out, out + nf, std::numeric_limits<double>::infinity());
+        for (std::size_t i = 0; i < dist.size(); ++i) {
+            out[i % nf] = std::min(out[i % nf], dist[i]);
+        }
+    };
+    columns(dist_b, nfa, memo.values.data());
+    columns(dist_a, nfb, memo.values.data() + nfa);
     // Per edge, the larger of the prune's two distances: beyond one face plane of the other body
     // (the larger over the planes of the nearer end's distance), and beyond its bounding sphere.
     const auto edge_reach = [](const std::vector<std::array<int, 4>>& edges,
@@ -747,6 +761,7 @@ void refill_memo(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, con
     const double tol = kMemoTolerance * (fa.radius + fb.radius);
     double deepest = -tol;
     memo.inside = -1;
+    memo.cross = -1;
     const auto scan = [&](const std::vector<double>& dist, std::size_t nf, std::size_t nv,
                           int base) {
         for (std::size_t i = 0; i < nv; ++i) {
@@ -794,6 +809,30 @@ bool memo_inside(const PolyhedronFeatures& fa, const Relative& r, int vertex, do
     return true;
 }
 
+/// Does an edge cross the other body (the full search's second certificate)? The edge that did
+/// at the last query first, then the kept ones in r (A's, then B's); the one found is kept in
+/// memo.cross (A's edge e as e, B's as the count of A's edges + e).
+bool memo_crossing(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const Relative& r,
+                   PlaneMemo& memo) {
+    thread_local std::vector<int> one(1);
+    const auto nea = static_cast<int>(fa.edges.size());
+    if (memo.cross >= 0) {
+        one[0] = memo.cross < nea ? memo.cross : memo.cross - nea;
+        if (memo.cross < nea
+                ? edge_crosses(fa.edges, one, fa.vertices, r.nb, r.ob) >= 0
+                : edge_crosses(fb.edges, one, r.vb, fa.face_normals, fa.face_offsets) >= 0) {
+            return true;
+        }
+    }
+    int e = edge_crosses(fa.edges, r.edges_a, fa.vertices, r.nb, r.ob);
+    if (e < 0) {
+        e = edge_crosses(fb.edges, r.edges_b, r.vb, fa.face_normals, fa.face_offsets);
+        e = e < 0 ? -1 : nea + e;
+    }
+    memo.cross = e;
+    return e >= 0;
+}
+
 /// The common plane from the memory (see PlaneMemo), after make_relative: true with best, best_m
 /// (A's frame), c.feature and the prune's lists in r set as the full search sets them, when the
 /// bounds single out the answer; false (c and r to be reset) when the full search must run.
@@ -811,7 +850,7 @@ bool memo_inside(const PolyhedronFeatures& fa, const Relative& r, int vertex, do
 /// other value met by the tolerance and a vertex lies inside the other body (then the full search
 /// has its certificate of overlap and takes no other path).
 bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Relative& r,
-                 const PlaneMemo& memo, double& best, Vec3& best_m, PolyhedronContact& c) {
+                 PlaneMemo& memo, double& best, Vec3& best_m, PolyhedronContact& c) {
     if (!memo.valid || memo.fa != &fa || memo.fb != &fb) {
         return false;
     }
@@ -900,9 +939,7 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
     // The certificate of overlap: the stored vertex, else a kept edge crossing the other body
     // (edge_crosses as the full search calls it: a crossing edge passes within the reach of the
     // other body, so the full prune keeps it too, and the same expression gives the same answer).
-    if (!memo_inside(fa, r, memo.inside, tol) &&
-        !edge_crosses(fa.edges, r.edges_a, fa.vertices, r.nb, r.ob) &&
-        !edge_crosses(fb.edges, r.edges_b, r.vb, fa.face_normals, fa.face_offsets)) {
+    if (!memo_inside(fa, r, memo.inside, tol) && !memo_crossing(fa, fb, r, memo)) {
         return false;
     }
     ++memo_counters.answered;
@@ -938,6 +975,7 @@ bool full_search(const PosedPolyhedron& a, const PosedPolyhedron& b, detail::Fac
     const bool bounded = scan == detail::FaceScan::bounded ||
                          (scan == detail::FaceScan::automatic && nva + nvb > nfa + nfb &&
                           nfa * nvb + nfb * nva >= kBoundedTableEntries);
+    r.full_tables = !bounded;
     // Upper bounds of the face separations (m), so that a face that cannot be the largest is
     // not scanned: the smallest distance of B's vertices beyond A's face plane k is at most the
     // distance of any point of B's hull, e.g. of c_B - rho_B n_k with c_B B's centre and rho_B
@@ -1034,8 +1072,8 @@ bool full_search(const PosedPolyhedron& a, const PosedPolyhedron& b, detail::Fac
             return bounded ? tb->any_inside() || ta->any_inside() : b_in_a || a_in_b;
         };
         if (best <= 0.0 && pruned_some && !inside() &&
-            !edge_crosses(fa.edges, r.edges_a, fa.vertices, r.nb, r.ob) &&
-            !edge_crosses(fb.edges, r.edges_b, r.vb, fa.face_normals, fa.face_offsets)) {
+            edge_crosses(fa.edges, r.edges_a, fa.vertices, r.nb, r.ob) < 0 &&
+            edge_crosses(fb.edges, r.edges_b, r.vb, fa.face_normals, fa.face_offsets) < 0) {
             Vec3 m;
             if (find_separating_direction(a, b, 1e-12 * (fa.radius + fb.radius), m)) {
                 c.depth = overlap_along(a, b, m);

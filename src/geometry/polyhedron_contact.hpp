@@ -156,6 +156,7 @@ struct PlaneMemo {
     /// bounding sphere).
     std::vector<double> values;
     int inside = -1; ///< a vertex strictly inside the other body: B's j as j, A's i as nv_B + i
+    int cross = -1;  ///< an edge found crossing the other body: A's e as e, B's as ne_A + e
 };
 
 /// As polyhedron_contact with `need_patch`, with the pair's memory `memo` (read and written; see
