@@ -6,9 +6,11 @@
 // CPU time per contact (particle and wall contacts) and a checksum of the final positions (m,
 // world frame), equal between builds that give the same bits.
 //
-// build/bench/kiln_scene_steps KIND WARMUP STEPS, KIND: sphere, sq08, sq03 (superquadrics of
+// build/bench/kiln_scene_steps KIND WARMUP STEPS (KILN_PLANE_MEMO=0 in the environment: without
+// the polyhedron pairs' memory), KIND: sphere, sq08, sq03 (superquadrics of
 // e = 0.8, 0.3) or a shipped shape name (cube, icosahedron, cylinder_16, cylinder_12, ...).
 
+#include "geometry/polyhedron_contact.hpp"
 #include "geometry/superquadric.hpp"
 #include "io/shape_reader.hpp"
 #include "lattice_scene.hpp"
@@ -52,6 +54,9 @@ int main(int argc, char** argv) {
     const int warmup = std::atoi(argv[2]);
     const int steps = std::atoi(argv[3]);
     kiln::dynamics::System sys(scene(kind));
+    // KILN_PLANE_MEMO=0: without the polyhedron pairs' memory (same bits, for A/B in one binary).
+    const char* memo_env = std::getenv("KILN_PLANE_MEMO");
+    sys.use_plane_memo(memo_env == nullptr || std::string(memo_env) != "0");
     for (int k = 0; k < warmup; ++k) {
         sys.step();
     }
@@ -71,5 +76,8 @@ int main(int argc, char** argv) {
                 "checksum %.17g\n",
                 kind.c_str(), 1e3 * t / steps, static_cast<double>(contacts) / (n * steps),
                 contacts > 0 ? 1e9 * t / static_cast<double>(contacts) : 0.0, checksum);
+    const auto& memo = kiln::geometry::plane_memo_counters();
+    std::fprintf(stderr, "plane memo: %ld queries tried it, %ld answered, %ld refills\n",
+                 memo.tried, memo.answered, memo.refills);
     return 0;
 }

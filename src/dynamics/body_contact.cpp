@@ -350,10 +350,10 @@ double polyhedron_pair_radius(const Element& a, const Element& b) {
 }
 
 /// Two polyhedron elements: fast common plane (default) or libccd GJK/EPA with the common-plane
-/// patch along EPA's normal. Normal from b to a; point: pair_point. `touched_last`: see
+/// patch along EPA's normal. Normal from b to a; point: pair_point. `touched_last`, `memo`: see
 /// element_contact.
 ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase method, Vec3* sep,
-                               bool touched_last) {
+                               bool touched_last, geometry::PlaneMemo* memo) {
     ElementContact out;
     const geometry::PosedPolyhedron pa{a.poly, a.centre, a.q};
     const geometry::PosedPolyhedron pb{b.poly, b.centre, b.q};
@@ -404,16 +404,17 @@ ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase m
             std::vector<std::pair<Vec3, double>>& vb;
             bool& known;
         } near{pa, pb, va, vb, near_known};
-        pc =
-            geometry::polyhedron_contact(pa, pb, [n = &near](const geometry::PolyhedronContact& c) {
-                if (!c.touching) {
-                    return false;
-                }
-                near_support(n->pa, -c.normal, c.depth, n->va);
-                near_support(n->pb, c.normal, c.depth, n->vb);
-                n->known = true;
-                return pair_point_needs_patch(n->va, n->vb);
-            });
+        const geometry::PatchTest need = [n = &near](const geometry::PolyhedronContact& c) {
+            if (!c.touching) {
+                return false;
+            }
+            near_support(n->pa, -c.normal, c.depth, n->va);
+            near_support(n->pb, c.normal, c.depth, n->vb);
+            n->known = true;
+            return pair_point_needs_patch(n->va, n->vb);
+        };
+        pc = memo != nullptr ? geometry::polyhedron_contact(pa, pb, need, *memo)
+                             : geometry::polyhedron_contact(pa, pb, need);
         out.converged = pc.converged;
         if (pc.converged && !pc.touching && pc.depth < 0.0 && sep != nullptr) {
             *sep = pc.normal; // the common plane of the largest gap
@@ -641,7 +642,8 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
 }
 
 ElementContact element_contact(const Element& a, const Element& b, NarrowPhase method,
-                               const Vec3* warm, Vec3* separating, bool touched_last) {
+                               const Vec3* warm, Vec3* separating, bool touched_last,
+                               geometry::PlaneMemo* memo) {
     // Bounding spheres first: most candidate pairs are apart.
     const double rsum = a.radius + b.radius;
     if ((a.centre - b.centre).squaredNorm() >= rsum * rsum) {
@@ -653,7 +655,7 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
     const bool poly_a = a.kind == Element::Kind::polyhedron;
     const bool poly_b = b.kind == Element::Kind::polyhedron;
     if (poly_a && poly_b) {
-        return polyhedron_pair(a, b, method, separating, touched_last);
+        return polyhedron_pair(a, b, method, separating, touched_last, memo);
     }
     if (poly_b && a.kind == Element::Kind::sphere) {
         return sphere_polyhedron(a, b);

@@ -120,9 +120,14 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
 /// `touched_last`: the pair touched at the last step. A polyhedron pair then skips the
 /// line-of-centres test (two support searches that almost never prove such a pair apart) and runs
 /// its exact query at once; other pairs ignore it.
+///
+/// `memo` (optional, in and out; read by pairs of polyhedra with the common plane, ignored by
+/// others): the pair's memory of its last search (geometry::PlaneMemo), which lets a resting
+/// contact skip the candidates that cannot win. The answer is the one without it, bit for bit.
 [[nodiscard]] ElementContact element_contact(const Element& a, const Element& b, NarrowPhase method,
                                              const Vec3* warm, Vec3* separating = nullptr,
-                                             bool touched_last = false);
+                                             bool touched_last = false,
+                                             geometry::PlaneMemo* memo = nullptr);
 
 /// Effective radius (m) of element a against a flat wall of unit normal n (from the wall to a,
 /// world frame): a sphere's radius, a polyhedron's equivalent radius, a superquadric's R* at its

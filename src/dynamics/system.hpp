@@ -176,6 +176,10 @@ class System {
     /// Turns the separating-direction cache of convex pairs (and the portal search of superquadric
     /// near misses) on (the default) or off. The results are the same either way (tests, A/B).
     void use_separation_cache(bool on) { separation_cache_ = on; }
+    /// Turns the memory of polyhedron pairs that touched at the last step (geometry::PlaneMemo:
+    /// the common-plane search evaluates only the candidates that can still win) on (the default)
+    /// or off. The results are the same bits either way (tests, A/B).
+    void use_plane_memo(bool on) { plane_memo_ = on; }
     /// The law of contacts with a convex element (polyhedron, superquadric; pairs and plane or
     /// cylinder walls) in blocks of vector lanes (on, the default) or one contact at a time (off,
     /// the route before session 12, for tests and A/B). Same contacts and order; the forces agree
@@ -333,6 +337,12 @@ class System {
     // `separating`). The answers do not depend on it, only the work does.
     std::vector<Vec3> sep_dirs_;
     bool separation_cache_ = true;
+    // Per list entry of two single polyhedra: the memory of its last common-plane search, read
+    // when the pair touched at the last step (element_contact's `memo`). It depends on the two
+    // shapes and their relative pose only, so it needs no reset at a list build or restart (a
+    // memory from another pose is refilled); the answers do not depend on it.
+    std::vector<geometry::PlaneMemo> plane_memos_;
+    bool plane_memo_ = true;
     bool convex_blocks_ = true; // see use_convex_blocks
     long separation_skips_ = 0;
     // Compact histories, parallel to member_pairs_ (docs/architecture.md, "Contact records"): the

@@ -692,6 +692,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // ordered): bounding spheres, the elements of each that reach the other, then every
             // element pair through the narrow phase (sphere pairs through the queue).
             std::vector<std::uint32_t> near_b;
+            if (plane_memos_.size() < sep_dirs_.size()) {
+                plane_memos_.resize(sep_dirs_.size());
+            }
             const auto general_entry = [&](std::uint32_t k, std::uint32_t a, std::uint32_t b) {
                 const double rsum = p_.radius[a] + p_.radius[b];
                 if ((p_.x[a] - p_.x[b]).squaredNorm() >= rsum * rsum) {
@@ -767,9 +770,15 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                                 sep = nullptr;
                             }
                         }
+                        geometry::PlaneMemo* memo = nullptr;
+                        if (single && plane_memo_ && old != nullptr &&
+                            A.kind == Element::Kind::polyhedron &&
+                            B.kind == Element::Kind::polyhedron) {
+                            memo = &plane_memos_[k];
+                        }
                         const ElementContact ec =
                             element_contact(A, B, spec_.narrow_phase, wants_warm ? &warm : nullptr,
-                                            sep, old != nullptr);
+                                            sep, old != nullptr, memo);
                         ++np_.calls;
                         separation_skips_ += ec.proved_apart ? 1 : 0;
                         np_.fallbacks += ec.fell_back ? 1 : 0;

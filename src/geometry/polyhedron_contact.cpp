@@ -152,6 +152,7 @@ struct Relative {
     DistanceTable dist_b, dist_a;
     std::vector<int> edges_a, edges_b; // feature edges kept for the edge-edge stage
     bool pruned = false;               // edges_a/edges_b are valid for this pose
+    bool full_tables = false;          // dist_b and dist_a hold every distance (full search)
 };
 
 /// B's pose and vertices in A's frame (enough for A's face stage, which rejects most near misses).
@@ -564,9 +565,10 @@ PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b,
 
 /// The edge-edge stage over the kept edges r.edges_a x r.edges_b (arcs set): raises best (the
 /// largest separation, m) and sets best_m (A's frame, from B to A) and c.feature when an edge pair
-/// spanning a face of the Minkowski difference gives a larger one.
+/// spanning a face of the Minkowski difference gives a larger one; `second` (m) is raised to the
+/// largest of the other values met (the runner-up, for the memory's tie test).
 void edge_stage(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const Relative& r,
-                double& best, Vec3& best_m, PolyhedronContact& c) {
+                double& best, Vec3& best_m, PolyhedronContact& c, double& second) {
     for (const int ia : r.edges_a) {
         const auto& ea = fa.edges[static_cast<std::size_t>(ia)];
         const Vec3& na0 = fa.face_normals[static_cast<std::size_t>(ea[2])];
@@ -595,9 +597,12 @@ void edge_stage(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, cons
             }
             const double sep = n.dot(pb - pa);
             if (sep > best) {
+                second = best;
                 best = sep;
                 best_m = -n;
                 c.feature = CommonPlaneFeature::kEdgeEdge;
+            } else {
+                second = std::max(second, sep);
             }
         }
     }
@@ -660,11 +665,12 @@ bool face_distances(const std::vector<Vec3>& n, const std::vector<double>& o,
     return inside;
 }
 
-/// Does a kept edge of one body (vertices `v`, A's frame) cross the other body (face planes n,
-/// o in A's frame), i.e. does a piece of positive length of it lie inside every face plane?
-bool edge_crosses(const std::vector<std::array<int, 4>>& edges, const std::vector<int>& kept,
-                  const std::vector<Vec3>& v, const std::vector<Vec3>& n,
-                  const std::vector<double>& o) {
+/// The first kept edge of one body (vertices `v`, A's frame) that crosses the other body (face
+/// planes n, o in A's frame), i.e. has a piece of positive length inside every face plane; -1:
+/// none.
+int edge_crosses(const std::vector<std::array<int, 4>>& edges, const std::vector<int>& kept,
+                 const std::vector<Vec3>& v, const std::vector<Vec3>& n,
+                 const std::vector<double>& o) {
     for (const int e : kept) {
         const Vec3& p0 = v[static_cast<std::size_t>(edges[static_cast<std::size_t>(e)][0])];
         const Vec3 d = v[static_cast<std::size_t>(edges[static_cast<std::size_t>(e)][1])] - p0;
@@ -682,39 +688,276 @@ bool edge_crosses(const std::vector<std::array<int, 4>>& edges, const std::vecto
             }
         }
         if (t0 < t1) {
+            return e;
+        }
+    }
+    return -1;
+}
+
+/// Tolerance of the memory's bounds and tests, relative to the sum of the bounding radii (-):
+/// far above the round-off of the distances (1e-16 relative) and of the stored values, far below
+/// any overlap the law acts on. Bounds are widened by it, ties within it and overlaps or
+/// certificates thinner than it go to the full search.
+constexpr double kMemoTolerance = 1e-9;
+
+/// Relative motion (relative to the sum of the bounding radii) beyond which the memory is not
+/// read and the full search refills it: the bounds widen with the motion, so a memory far from
+/// the pose rules out little. A choice of speed only; the answer does not depend on it.
+constexpr double kMemoDrift = 0.01;
+
+thread_local PlaneMemoCounters memo_counters;
+
+/// Refills the memory at the pose of r (make_relative and relative_faces done) from complete
+/// tables of distances, for a touching answer `best` (m, < 0), with the vertex deepest inside the
+/// other body as the certificate to try first (none: -1).
+void refill_memo(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const Relative& r,
+                 double best, PlaneMemo& memo) {
+    ++memo_counters.refills;
+    // The full search's tables where it filled them all (the values are bounds: any exact
+    // evaluation serves), else tables of their own.
+    thread_local std::vector<double> own_b; // B's vertices beyond A's planes
+    thread_local std::vector<double> own_a; // A's vertices beyond B's planes
+    thread_local std::vector<double> sep;
+    const std::size_t nfa = fa.face_normals.size();
+    const std::size_t nfb = fb.face_normals.size();
+    memo.values.resize(nfa + nfb + fa.edges.size() + fb.edges.size());
+    if (!r.full_tables) {
+        face_distances(fa.face_normals, fa.face_offsets, r.vb, own_b, sep);
+        face_distances(r.nb, r.ob, fa.vertices, own_a, sep);
+    }
+    const std::vector<double>& dist_b = r.full_tables ? r.dist_b.dist : own_b;
+    const std::vector<double>& dist_a = r.full_tables ? r.dist_a.dist : own_a;
+    // Separation along each face: the smallest distance in its column.
+    const auto columns = [](const std::vector<double>& dist, std::size_t nf, double* out) {
+        std::fill(out, out + nf, std::numeric_limits<double>::infinity());
+        for (std::size_t i = 0; i < dist.size(); ++i) {
+            out[i % nf] = std::min(out[i % nf], dist[i]);
+        }
+    };
+    columns(dist_b, nfa, memo.values.data());
+    columns(dist_a, nfb, memo.values.data() + nfa);
+    // Per edge, the larger of the prune's two distances: beyond one face plane of the other body
+    // (the larger over the planes of the nearer end's distance), and beyond its bounding sphere.
+    const auto edge_reach = [](const std::vector<std::array<int, 4>>& edges,
+                               const std::vector<Vec3>& v, const std::vector<double>& dist,
+                               std::size_t nf, const Vec3& centre, double radius, double* out) {
+        for (std::size_t e = 0; e < edges.size(); ++e) {
+            const auto i0 = static_cast<std::size_t>(edges[e][0]);
+            const auto i1 = static_cast<std::size_t>(edges[e][1]);
+            const double* d0 = dist.data() + i0 * nf;
+            const double* d1 = dist.data() + i1 * nf;
+            double m = std::sqrt(segment_point_distance2(v[i0], v[i1], centre)) - radius;
+            for (std::size_t k = 0; k < nf; ++k) {
+                m = std::max(m, std::min(d0[k], d1[k]));
+            }
+            out[e] = m;
+        }
+    };
+    double* stored_edges = memo.values.data() + nfa + nfb;
+    edge_reach(fa.edges, fa.vertices, dist_a, nfb, r.shift, fb.radius, stored_edges);
+    edge_reach(fb.edges, r.vb, dist_b, nfa, Vec3::Zero(), fa.radius,
+               stored_edges + fa.edges.size());
+    // The vertex deepest inside the other body (smallest largest distance), B's first.
+    const double tol = kMemoTolerance * (fa.radius + fb.radius);
+    double deepest = -tol;
+    memo.inside = -1;
+    memo.cross = -1;
+    const auto scan = [&](const std::vector<double>& dist, std::size_t nf, std::size_t nv,
+                          int base) {
+        for (std::size_t i = 0; i < nv; ++i) {
+            const double* d = dist.data() + i * nf;
+            const double top = *std::max_element(d, d + nf);
+            if (top < deepest) {
+                deepest = top;
+                memo.inside = base + static_cast<int>(i);
+            }
+        }
+    };
+    scan(dist_b, nfa, r.vb.size(), 0);
+    scan(dist_a, nfb, fa.vertices.size(), static_cast<int>(r.vb.size()));
+    memo.valid = true;
+    memo.fa = &fa;
+    memo.fb = &fb;
+    memo.rot = r.rot;
+    memo.shift = r.shift;
+    memo.shift_in_b = r.rot.transpose() * r.shift;
+    memo.answer = best;
+}
+
+/// Is the memory's certificate vertex still inside the other body by more than tol (m)? (B's
+/// planes in r: relative_faces done; -1: no vertex.)
+bool memo_inside(const PolyhedronFeatures& fa, const Relative& r, int vertex, double tol) {
+    const auto nvb = static_cast<int>(r.vb.size());
+    if (vertex < 0) {
+        return false;
+    }
+    if (vertex < nvb) {
+        const Vec3 x = r.vb[static_cast<std::size_t>(vertex)];
+        for (std::size_t k = 0; k < fa.face_normals.size(); ++k) {
+            if (!(fa.face_normals[k].dot(x) - fa.face_offsets[k] < -tol)) {
+                return false;
+            }
+        }
+        return true;
+    }
+    const Vec3 x = fa.vertices[static_cast<std::size_t>(vertex - nvb)];
+    for (std::size_t k = 0; k < r.nb.size(); ++k) {
+        if (!(r.nb[k].dot(x) - r.ob[k] < -tol)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+/// Does an edge cross the other body (the full search's second certificate)? The edge that did
+/// at the last query first, then the kept ones in r (A's, then B's); the one found is kept in
+/// memo.cross (A's edge e as e, B's as the count of A's edges + e).
+bool memo_crossing(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const Relative& r,
+                   PlaneMemo& memo) {
+    thread_local std::vector<int> one(1);
+    const auto nea = static_cast<int>(fa.edges.size());
+    if (memo.cross >= 0) {
+        one[0] = memo.cross < nea ? memo.cross : memo.cross - nea;
+        if (memo.cross < nea
+                ? edge_crosses(fa.edges, one, fa.vertices, r.nb, r.ob) >= 0
+                : edge_crosses(fb.edges, one, r.vb, fa.face_normals, fa.face_offsets) >= 0) {
             return true;
         }
     }
-    return false;
+    int e = edge_crosses(fa.edges, r.edges_a, fa.vertices, r.nb, r.ob);
+    if (e < 0) {
+        e = edge_crosses(fb.edges, r.edges_b, r.vb, fa.face_normals, fa.face_offsets);
+        e = e < 0 ? -1 : nea + e;
+    }
+    memo.cross = e;
+    return e >= 0;
+}
+
+/// The common plane from the memory (see PlaneMemo), after make_relative: true with best, best_m
+/// (A's frame), c.feature and the prune's lists in r set as the full search sets them, when the
+/// bounds single out the answer; false (c and r to be reset) when the full search must run.
+///
+/// Why it is the full search's answer: a vertex of one body moves relative to the other by at
+/// most drift = |dR| r + |ds| (the change of the relative rotation in the Frobenius norm, which
+/// bounds the spectral one, times the bounding radius, plus the change of the centre's position),
+/// so every separation along a face and every distance beyond a plane moves by at most the drift,
+/// and the largest separation of all (the answer) too. A face whose stored separation plus the
+/// drift lies below a lower bound of the answer cannot win nor tie and is not evaluated; an edge
+/// whose stored distance beyond one plane minus the drift exceeds the prune's reach is one the full
+/// prune drops as well (the reach here is at least the full search's: its best face is at most
+/// the full search's). So the candidates evaluated include all the full search evaluates that can
+/// come near the answer, by the same expressions; the answer is kept only when it beats every
+/// other value met by the tolerance and a vertex lies inside the other body (then the full search
+/// has its certificate of overlap and takes no other path).
+bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Relative& r,
+                 PlaneMemo& memo, double& best, Vec3& best_m, PolyhedronContact& c) {
+    if (!memo.valid || memo.fa != &fa || memo.fb != &fb) {
+        return false;
+    }
+    ++memo_counters.tried;
+    const double scale = fa.radius + fb.radius;
+    const double tol = kMemoTolerance * scale;
+    const double turn = (r.rot - memo.rot).norm();
+    const double drift_b = turn * fb.radius + (r.shift - memo.shift).norm();
+    const double drift_a =
+        turn * fa.radius + (r.rot.transpose() * r.shift - memo.shift_in_b).norm();
+    if (!(std::max(drift_a, drift_b) <= kMemoDrift * scale)) {
+        return false;
+    }
+    const double floor = memo.answer - std::min(drift_a, drift_b) - tol; // <= the answer
+    thread_local std::vector<double> sep;
+    thread_local std::vector<double> bound;
+    double second = -std::numeric_limits<double>::infinity();
+    const std::size_t nfa = fa.face_normals.size();
+    const std::size_t nfb = fb.face_normals.size();
+    // Faces of A: a face is evaluated unless its bound (stored value, drift, round-off of the
+    // stored value, and the tie margin) lies below the running lower bound of the answer.
+    PlaneDistances tb(fa.face_normals, fa.face_offsets, r.vb, r.dist_b);
+    bound.resize(nfa);
+    for (std::size_t k = 0; k < nfa; ++k) {
+        bound[k] = memo.values[k] + drift_b + 2.0 * tol;
+    }
+    face_separations(tb, bound, floor, sep);
+    for (std::size_t k = 0; k < nfa; ++k) {
+        ++c.iterations;
+        if (sep[k] > best) {
+            second = best;
+            best = sep[k];
+            best_m = -fa.face_normals[k];
+            c.feature = CommonPlaneFeature::kFaceOfA;
+        } else {
+            second = std::max(second, sep[k]);
+        }
+    }
+    if (!(best < -tol)) {
+        return false;
+    }
+    relative_faces(fb, r);
+    PlaneDistances ta(r.nb, r.ob, fa.vertices, r.dist_a);
+    bound.resize(nfb);
+    for (std::size_t k = 0; k < nfb; ++k) {
+        bound[k] = memo.values[nfa + k] + drift_a + 2.0 * tol;
+    }
+    face_separations(ta, bound, std::max(floor, best), sep);
+    for (std::size_t k = 0; k < nfb; ++k) {
+        ++c.iterations;
+        if (sep[k] > best) {
+            second = best;
+            best = sep[k];
+            best_m = r.nb[k];
+            c.feature = CommonPlaneFeature::kFaceOfB;
+        } else {
+            second = std::max(second, sep[k]);
+        }
+    }
+    if (!(best < -tol)) {
+        return false;
+    }
+    // The prune from the stored distances (the full search's reach expression).
+    const double reach = -best + 1e-9 * (fa.radius + fb.radius);
+    // An edge is dropped when its stored distance, less the drift and the tolerance, exceeds the
+    // reach; written without a branch (most edges are dropped, the rest in no pattern).
+    const auto keep = [](const double* stored, std::size_t n, double bar, std::vector<int>& kept) {
+        kept.resize(n);
+        int* out = kept.data();
+        std::size_t m = 0;
+        for (std::size_t e = 0; e < n; ++e) {
+            out[m] = static_cast<int>(e);
+            m += stored[e] > bar ? 0U : 1U;
+        }
+        kept.resize(m);
+    };
+    const double* stored_edges = memo.values.data() + nfa + nfb;
+    keep(stored_edges, fa.edges.size(), reach + drift_a + tol, r.edges_a);
+    keep(stored_edges + fa.edges.size(), fb.edges.size(), reach + drift_b + tol, r.edges_b);
+    r.pruned = true;
+    relative_arcs(fb, r);
+    edge_stage(fa, fb, r, best, best_m, c, second);
+    if (!(best < -tol) || !(second < best - tol)) {
+        return false;
+    }
+    // The certificate of overlap: the stored vertex, else a kept edge crossing the other body
+    // (edge_crosses as the full search calls it: a crossing edge passes within the reach of the
+    // other body, so the full prune keeps it too, and the same expression gives the same answer).
+    if (!memo_inside(fa, r, memo.inside, tol) && !memo_crossing(fa, fb, r, memo)) {
+        return false;
+    }
+    ++memo_counters.answered;
+    return true;
 }
 
 } // namespace
 
 namespace {
 
-/// The fast common plane; the patch as `with_patch` says, or (with `need_patch`) as it decides.
+/// The full search of the fast common plane (after make_relative): sets best (the largest
+/// separation, m), best_m (A's frame, from B to A), c.feature and c.iterations, and the prune's
+/// lists in r. False when a separating direction proved the pair apart: c is then the answer.
 /// `scan`: which face stages (see detail::FaceScan).
-PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& b, bool with_patch,
-                               const PatchTest* need_patch, detail::FaceScan scan) {
-    PolyhedronContact c;
+bool full_search(const PosedPolyhedron& a, const PosedPolyhedron& b, detail::FaceScan scan,
+                 Relative& r, double& best, Vec3& best_m, PolyhedronContact& c) {
     const PolyhedronFeatures& fa = *a.shape;
     const PolyhedronFeatures& fb = *b.shape;
-    const double dist = (b.x - a.x).norm();
-    if (!std::isfinite(dist) || !std::isfinite(a.q.norm()) || !std::isfinite(b.q.norm())) {
-        c.converged = false;
-        return c;
-    }
-    if (dist > fa.radius + fb.radius) {
-        c.depth = fa.radius + fb.radius - dist;
-        return c;
-    }
-    thread_local Relative r;
-    make_relative(a, b, r);
-
-    // Largest separation (smallest overlap) over the candidate planes, in A's frame. m is the
-    // normal from B to A.
-    double best = -std::numeric_limits<double>::infinity();
-    Vec3 best_m = Vec3::UnitX();
     const std::size_t nfa = fa.face_normals.size();
     const std::size_t nfb = fb.face_normals.size();
     thread_local std::vector<double> sep;
@@ -724,16 +967,17 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
     // plane's scan is long and a vertex's row short: bodies with more vertices than faces, in a
     // table too large for the bookkeeping to vanish in (measured, docs/performance.md,
     // "Polyhedron search with bounded face stages (session 12)": 1.3x for `cylinder_16` pairs,
-    // 1.05x for `cylinder_8`; icosahedra, 12 vertices and 20 faces, and cubes, a table of 96, do
-    // not gain). Others take the full tables: every vertex against every face plane, vertex by
-    // vertex, the inside-vertex certificates in the same pass. Same answer, bit for bit.
+    // 1.05x for `cylinder_8`; icosahedra, 12 vertices and 20 faces, and cubes, a table of 96,
+    // do not gain). Others take the full tables: every vertex against every face plane, vertex
+    // by vertex, the inside-vertex certificates in the same pass. Same answer, bit for bit.
     const std::size_t nva = fa.vertices.size();
     const std::size_t nvb = r.vb.size();
     const bool bounded = scan == detail::FaceScan::bounded ||
                          (scan == detail::FaceScan::automatic && nva + nvb > nfa + nfb &&
                           nfa * nvb + nfb * nva >= kBoundedTableEntries);
-    // Upper bounds of the face separations (m), so that a face that cannot be the largest is not
-    // scanned: the smallest distance of B's vertices beyond A's face plane k is at most the
+    r.full_tables = !bounded;
+    // Upper bounds of the face separations (m), so that a face that cannot be the largest is
+    // not scanned: the smallest distance of B's vertices beyond A's face plane k is at most the
     // distance of any point of B's hull, e.g. of c_B - rho_B n_k with c_B B's centre and rho_B
     // its inscribed radius (the ball of radius rho_B about the centre lies inside every face
     // plane): n_k . c_B - o_k - rho_B; for B's face k (in A's frame) and A's vertices,
@@ -793,12 +1037,12 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
     }
     if (best <= 0.0) {
         // Exact prune of the edge stage. If the deepest plane is an edge-edge one with overlap
-        // d* < D = -best, the origin's nearest point on the Minkowski difference lies on the face
-        // spanned by the two edges, i.e. points of the two edges are d* apart: each edge passes
-        // within D of the other body. An edge farther than D from the other body's bounding
-        // sphere, or whose two ends lie beyond one face plane of the other body by more than D,
-        // is farther than D from that body and cannot carry the optimum, so it is dropped
-        // (slack: 1e-9 of the size against round-off).
+        // d* < D = -best, the origin's nearest point on the Minkowski difference lies on the
+        // face spanned by the two edges, i.e. points of the two edges are d* apart: each edge
+        // passes within D of the other body. An edge farther than D from the other body's
+        // bounding sphere, or whose two ends lie beyond one face plane of the other body by
+        // more than D, is farther than D from that body and cannot carry the optimum, so it is
+        // dropped (slack: 1e-9 of the size against round-off).
         const double reach = -best + 1e-9 * (fa.radius + fb.radius);
         if (bounded) {
             keep_edges(fa.edges, *ta, reach, r.shift, fb.radius, r.edges_a);
@@ -811,36 +1055,82 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
         }
         r.pruned = true;
         relative_arcs(fb, r);
-        edge_stage(fa, fb, r, best, best_m, c);
+        double second = -std::numeric_limits<double>::infinity(); // not read here
+        edge_stage(fa, fb, r, best, best_m, c, second);
         // The prune's argument needs overlapping bodies: when they are apart, the separating
         // edge pair may lie farther apart than D and be dropped, and the search would report a
         // contact that is not there (found by a random-pose test against
         // find_separating_direction). So a "touching" answer of a pruned search is kept only
         // with a certificate of overlap: a vertex of one body inside the other (the distances
-        // beyond the face planes, computed here where not yet) or a kept edge crossing the other
-        // body. Otherwise a separating direction is
-        // searched, and without one the edge stage runs again over every edge pair (the search
-        // before the prune, exact in both cases).
+        // beyond the face planes, computed here where not yet) or a kept edge crossing the
+        // other body. Otherwise a separating direction is searched, and without one the edge
+        // stage runs again over every edge pair (the search before the prune, exact in both
+        // cases).
         const bool pruned_some =
             r.edges_a.size() < fa.edges.size() || r.edges_b.size() < fb.edges.size();
         const auto inside = [&] {
             return bounded ? tb->any_inside() || ta->any_inside() : b_in_a || a_in_b;
         };
         if (best <= 0.0 && pruned_some && !inside() &&
-            !edge_crosses(fa.edges, r.edges_a, fa.vertices, r.nb, r.ob) &&
-            !edge_crosses(fb.edges, r.edges_b, r.vb, fa.face_normals, fa.face_offsets)) {
+            edge_crosses(fa.edges, r.edges_a, fa.vertices, r.nb, r.ob) < 0 &&
+            edge_crosses(fb.edges, r.edges_b, r.vb, fa.face_normals, fa.face_offsets) < 0) {
             Vec3 m;
             if (find_separating_direction(a, b, 1e-12 * (fa.radius + fb.radius), m)) {
                 c.depth = overlap_along(a, b, m);
                 c.normal = m;
-                return c;
+                return false;
             }
             r.edges_a.resize(fa.edges.size());
             std::iota(r.edges_a.begin(), r.edges_a.end(), 0);
             r.edges_b.resize(fb.edges.size());
             std::iota(r.edges_b.begin(), r.edges_b.end(), 0);
             relative_arcs(fb, r);
-            edge_stage(fa, fb, r, best, best_m, c);
+            edge_stage(fa, fb, r, best, best_m, c, second);
+        }
+    }
+    return true;
+}
+
+/// The fast common plane; the patch as `with_patch` says, or (with `need_patch`) as it decides.
+/// `scan`: which face stages (see detail::FaceScan).
+PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& b, bool with_patch,
+                               const PatchTest* need_patch, detail::FaceScan scan,
+                               PlaneMemo* memo = nullptr) {
+    PolyhedronContact c;
+    const PolyhedronFeatures& fa = *a.shape;
+    const PolyhedronFeatures& fb = *b.shape;
+    const double dist = (b.x - a.x).norm();
+    if (!std::isfinite(dist) || !std::isfinite(a.q.norm()) || !std::isfinite(b.q.norm())) {
+        c.converged = false;
+        return c;
+    }
+    if (dist > fa.radius + fb.radius) {
+        c.depth = fa.radius + fb.radius - dist;
+        return c;
+    }
+    thread_local Relative r;
+    make_relative(a, b, r);
+
+    // Largest separation (smallest overlap) over the candidate planes, in A's frame. m is the
+    // normal from B to A.
+    double best = -std::numeric_limits<double>::infinity();
+    Vec3 best_m = Vec3::UnitX();
+    // A resting pair's memory first (same answer); the full search when it cannot tell.
+    const bool from_memo = memo != nullptr && memo_search(fa, fb, r, *memo, best, best_m, c);
+    if (memo != nullptr && !from_memo) {
+        c = PolyhedronContact{};
+        best = -std::numeric_limits<double>::infinity();
+        best_m = Vec3::UnitX();
+        r.pruned = false;
+    }
+    if (!from_memo && !full_search(a, b, scan, r, best, best_m, c)) {
+        return c; // apart along a searched direction
+    }
+    if (memo != nullptr && !from_memo) {
+        if (best < 0.0) {
+            refill_memo(fa, fb, r, best, *memo);
+        } else {
+            memo->valid = false;
         }
     }
     if (best > 0.0) {
@@ -899,6 +1189,15 @@ PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhe
 PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b,
                                      const PatchTest& need_patch) {
     return common_plane(a, b, true, &need_patch, detail::FaceScan::automatic);
+}
+
+PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b,
+                                     const PatchTest& need_patch, PlaneMemo& memo) {
+    return common_plane(a, b, true, &need_patch, detail::FaceScan::automatic, &memo);
+}
+
+PlaneMemoCounters& plane_memo_counters() {
+    return memo_counters;
 }
 
 namespace detail {

@@ -133,6 +133,48 @@ enum class FaceScan {
                                                         bool with_patch = true);
 } // namespace detail
 
+/// Memory of one pair's common plane between steps (temporal coherence of a resting contact).
+/// Filled by the full search at a stored relative pose; at a later pose the separation of every
+/// candidate has moved by at most the distance a vertex has moved relative to the other body
+/// (translation plus rotation times the bounding radius), so the stored separations become upper
+/// bounds and the edges' stored distances beyond the other body's planes lower bounds. The search
+/// then evaluates only the faces and edges these bounds cannot rule out, and keeps its answer only
+/// when it is clear (no near tie, a certificate of overlap): otherwise the full search runs and
+/// refills the memory. The answer is the full search's, bit for bit (the same expressions
+/// for the candidates evaluated; those ruled out lie below it by a margin).
+struct PlaneMemo {
+    bool valid = false;                     ///< filled for the shapes below
+    const PolyhedronFeatures* fa = nullptr; ///< A's features when filled
+    const PolyhedronFeatures* fb = nullptr; ///< B's features when filled
+    Mat3 rot = Mat3::Identity();            ///< B body -> A body at the stored pose
+    Vec3 shift = Vec3::Zero();              ///< B's centre in A's frame (m), stored pose
+    Vec3 shift_in_b = Vec3::Zero();         ///< rot^T shift (m): A's centre is -this in B's frame
+    double answer = 0.0;                    ///< largest separation (m, < 0: overlap), stored pose
+    /// Stored values (m), one block: the separation along each face of A, then of B; then per
+    /// feature edge of A, then of B, a lower bound of its distance from the other body (the larger
+    /// of its distance beyond one of the other's face planes, both ends, and beyond the other's
+    /// bounding sphere).
+    std::vector<double> values;
+    int inside = -1; ///< a vertex strictly inside the other body: B's j as j, A's i as nv_B + i
+    int cross = -1;  ///< an edge found crossing the other body: A's e as e, B's as ne_A + e
+};
+
+/// As polyhedron_contact with `need_patch`, with the pair's memory `memo` (read and written; see
+/// PlaneMemo). The same answer as without it, bit for bit.
+[[nodiscard]] PolyhedronContact polyhedron_contact(const PosedPolyhedron& a,
+                                                   const PosedPolyhedron& b,
+                                                   const PatchTest& need_patch, PlaneMemo& memo);
+
+/// Counters of the memory route in this thread (for tests and benchmarks): queries that tried it,
+/// and those it answered.
+struct PlaneMemoCounters {
+    long tried = 0;    ///< queries with a valid memory
+    long answered = 0; ///< of which the memory's route gave the answer
+    long refills = 0;  ///< full searches that refilled a memory
+};
+/// This thread's counters (mutable, for resetting).
+PlaneMemoCounters& plane_memo_counters();
+
 /// Points and patch for a given normal m (unit, from B to A, world frame), as polyhedron_contact
 /// computes them after finding its plane; fills depth (h_A(-m) + h_B(m)), normal, point, points,
 /// patch and patch_area. Gives a patch to a normal found otherwise (e.g. by EPA).

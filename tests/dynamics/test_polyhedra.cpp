@@ -392,6 +392,37 @@ TEST(Polyhedra, SeparationCacheChangesNoBit) {
                 contacts, with.separation_skips(), with.narrow_phase_counters().calls);
 }
 
+TEST(Polyhedra, PlaneMemoChangesNoBit) {
+    // The memory of a touching polyhedron pair's last common-plane search (geometry::PlaneMemo)
+    // only skips candidates that cannot win: the convex pour with it and without it gives the
+    // same bits, and the memory answered queries.
+    System with(convex_pour());
+    System without(convex_pour());
+    without.use_plane_memo(false);
+    const long answered0 = kiln::geometry::plane_memo_counters().answered;
+    long contacts = 0;
+    for (int k = 0; k < 30000; ++k) {
+        with.step();
+        without.step();
+        contacts += with.counters().particle_contacts;
+        ASSERT_EQ(with.counters().particle_contacts, without.counters().particle_contacts) << k;
+    }
+    const long answered = kiln::geometry::plane_memo_counters().answered - answered0;
+    EXPECT_GT(contacts, 20000);
+    EXPECT_GT(answered, 1000);
+    const ParticleStore& p = with.particles();
+    const ParticleStore& q = without.particles();
+    ASSERT_EQ(p.size(), q.size());
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        EXPECT_EQ(p.x[i], q.x[i]); // exact equality is the point
+        EXPECT_EQ(p.v[i], q.v[i]);
+        EXPECT_EQ(p.q[i].coeffs(), q.q[i].coeffs());
+        EXPECT_EQ(p.ang_mom[i], q.ang_mom[i]);
+    }
+    std::printf("%ld contacts, %ld polyhedron queries answered by the memory\n", contacts,
+                answered);
+}
+
 TEST(Polyhedra, ConvexBlocksAgreeWithTheOneContactRoute) {
     // Contacts of convex elements (pairs and walls) go through the law in blocks of vector lanes;
     // the route before (one contact at a time) is kept behind a switch. From the same state, one

@@ -558,6 +558,73 @@ TEST(PolyhedronContact, FaceBoundsChangeNoBit) {
     EXPECT_GT(apart, 300);
 }
 
+/// Expects the memory's result to be the full search's, bit for bit (all but the count of
+/// candidates, which is what the memory saves).
+void expect_same_answer(const g::PolyhedronContact& x, const g::PolyhedronContact& y) {
+    g::PolyhedronContact z = x;
+    z.iterations = y.iterations;
+    expect_same_bits(z, y);
+}
+
+/// A random rotation by an angle of at most `angle` (rad).
+Quat small_turn(double angle, std::mt19937_64& rng) {
+    std::normal_distribution<double> nd;
+    std::uniform_real_distribution<double> ud(0.0, angle);
+    return Quat(Eigen::AngleAxisd(ud(rng), Vec3(nd(rng), nd(rng), nd(rng)).normalized()));
+}
+
+TEST(PolyhedronContact, MemoryChangesNoBit) {
+    // A pair's memory of its last search (PlaneMemo) along random trajectories of touching pairs:
+    // steps of 1e-8 to 3e-3 of the size, translation and rotation, so that the memory is read
+    // with tight and loose bounds, refilled when the pair has moved too far, and meets pairs that
+    // come apart. Every answer equals the full search's bit for bit (normal, depth, feature,
+    // point, points, patch), with the patch asked for and not; the aligned cube stacks give
+    // face-on-face contacts with near ties.
+    std::mt19937_64 rng(53);
+    std::vector<g::PolyhedronFeatures> shapes;
+    for (const std::string name :
+         {"cube", "icosahedron", "cylinder_16", "cylinder_8", "pyramid", "plate_10x9x2"}) {
+        shapes.push_back(load(name));
+    }
+    std::normal_distribution<double> nd;
+    std::uniform_real_distribution<double> step(std::log(1e-8), std::log(3e-3));
+    const g::PlaneMemoCounters before = g::plane_memo_counters();
+    int touching = 0;
+    for (std::size_t i = 0; i < shapes.size(); ++i) {
+        for (std::size_t j = 0; j < shapes.size(); ++j) {
+            SCOPED_TRACE(std::to_string(i) + " on " + std::to_string(j));
+            for (int n = 0; n < 16; ++n) {
+                RandomPair p = random_pair(shapes[i], shapes[j], rng);
+                if (i == 0 && j == 0 && n < 4) { // aligned cubes, B on A's top face, shifted
+                    p.a.q = Quat::Identity();
+                    p.b.q = small_turn(1e-9, rng);
+                    p.b.x = p.a.x + Vec3(1e-3 * nd(rng), 1e-3 * nd(rng),
+                                         2.0 * shapes[0].inradius - 1e-6 * (n + 1));
+                }
+                g::PlaneMemo memo;
+                for (int t = 0; t < 40; ++t) {
+                    const double size = shapes[i].radius + shapes[j].radius;
+                    const double s = std::exp(step(rng));
+                    p.b.x += s * size * Vec3(nd(rng), nd(rng), nd(rng)).normalized();
+                    p.a.q = (small_turn(s, rng) * p.a.q).normalized();
+                    p.b.q = (small_turn(s, rng) * p.b.q).normalized();
+                    const bool want = t % 3 != 0;
+                    const g::PatchTest need = [want](const g::PolyhedronContact&) { return want; };
+                    const g::PolyhedronContact full = g::polyhedron_contact(p.a, p.b, need);
+                    expect_same_answer(g::polyhedron_contact(p.a, p.b, need, memo), full);
+                    touching += full.touching ? 1 : 0;
+                }
+            }
+        }
+    }
+    const g::PlaneMemoCounters& after = g::plane_memo_counters();
+    const long answered = after.answered - before.answered;
+    std::printf("%d touching, memory tried %ld, answered %ld, refilled %ld\n", touching,
+                after.tried - before.tried, answered, after.refills - before.refills);
+    EXPECT_GT(touching, 10000);
+    EXPECT_GT(answered, touching / 2); // the memory's route is exercised, not only the fallback
+}
+
 TEST(SeparatingAxis, PolyhedronOverlapFromHeightsAgreesWithTheSupportForm) {
     // polyhedron_overlap_along (heights in the body frames) against overlap_along (support points
     // turned to the world) over near-contact poses and random directions: the same number to
