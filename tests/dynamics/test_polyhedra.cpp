@@ -362,6 +362,17 @@ SceneSpec convex_pour() {
     return s;
 }
 
+/// Positions, velocities, orientations and angular momenta of two runs agree bit for bit.
+void expect_same_bits(const ParticleStore& p, const ParticleStore& q) {
+    ASSERT_EQ(p.size(), q.size());
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        EXPECT_EQ(p.x[i], q.x[i]); // exact equality is the point
+        EXPECT_EQ(p.v[i], q.v[i]);
+        EXPECT_EQ(p.q[i].coeffs(), q.q[i].coeffs());
+        EXPECT_EQ(p.ang_mom[i], q.ang_mom[i]);
+    }
+}
+
 TEST(Polyhedra, SeparationCacheChangesNoBit) {
     // The separating direction kept per list entry (and the portal search of superquadric near
     // misses) only skips queries whose answer is "apart": a pour with it and one without give the
@@ -379,15 +390,7 @@ TEST(Polyhedra, SeparationCacheChangesNoBit) {
     EXPECT_GT(contacts, 20000);
     EXPECT_GT(with.separation_skips(), 100000);
     EXPECT_EQ(without.separation_skips(), 0);
-    const ParticleStore& p = with.particles();
-    const ParticleStore& q = without.particles();
-    ASSERT_EQ(p.size(), q.size());
-    for (std::size_t i = 0; i < p.size(); ++i) {
-        EXPECT_EQ(p.x[i], q.x[i]); // exact equality is the point
-        EXPECT_EQ(p.v[i], q.v[i]);
-        EXPECT_EQ(p.q[i].coeffs(), q.q[i].coeffs());
-        EXPECT_EQ(p.ang_mom[i], q.ang_mom[i]);
-    }
+    expect_same_bits(with.particles(), without.particles());
     std::printf("%ld contacts, %ld of %ld convex queries answered by a separating direction\n",
                 contacts, with.separation_skips(), with.narrow_phase_counters().calls);
 }
@@ -410,15 +413,7 @@ TEST(Polyhedra, PlaneMemoChangesNoBit) {
     const long answered = kiln::geometry::plane_memo_counters().answered - answered0;
     EXPECT_GT(contacts, 20000);
     EXPECT_GT(answered, 1000);
-    const ParticleStore& p = with.particles();
-    const ParticleStore& q = without.particles();
-    ASSERT_EQ(p.size(), q.size());
-    for (std::size_t i = 0; i < p.size(); ++i) {
-        EXPECT_EQ(p.x[i], q.x[i]); // exact equality is the point
-        EXPECT_EQ(p.v[i], q.v[i]);
-        EXPECT_EQ(p.q[i].coeffs(), q.q[i].coeffs());
-        EXPECT_EQ(p.ang_mom[i], q.ang_mom[i]);
-    }
+    expect_same_bits(with.particles(), without.particles());
     std::printf("%ld contacts, %ld polyhedron queries answered by the memory\n", contacts,
                 answered);
 }
