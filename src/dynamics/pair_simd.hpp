@@ -309,14 +309,13 @@ void inner_touching_entries(const PairArrays& a, InnerChunk& in, std::size_t beg
 }
 #endif
 
-/// The touching list entries active.k[0..n) of a chunk (their particles and centre differences
-/// as the filter appended them), four at a time with the law on the four
-/// lanes of a register (AVX2): records transposed in registers, geometry and law (evaluate_lanes),
-/// then the results added to force/torque contact by contact in list order (`direct`, one thread)
-/// or written to rows[9 (first_row + a)] (several threads). Pair properties from `pairs` by the
-/// particles' `material`. Returns how many entries it took (a multiple of four); energy and
-/// max_ratio accumulate in entry order.
-/// `variant` selects the law's contact::LaneVariant (without_rolling only when rolling is 0).
+/// The touching list entries active.k[0..n) of a chunk (their particles as the filter appended
+/// them), four at a time with the law on the four lanes of a register (AVX2): records transposed in
+/// registers, geometry and law (evaluate_lanes), then the results added to force/torque contact by
+/// contact in list order (`direct`, one thread) or written to rows[9 (first_row + a)] (several
+/// threads). Pair properties from `pairs` by the particles' `material`. Returns how many entries it
+/// took (a multiple of four); energy and max_ratio accumulate in entry order. `variant` selects the
+/// law's contact::LaneVariant (without_rolling only when rolling is 0).
 template <unsigned variant, class Law, bool direct, bool uniform>
 std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std::int32_t* material,
                               double fn_floor, double rolling, double dt, const PairArrays& a,
