@@ -1,34 +1,21 @@
 #include "fluid/deposit_body.hpp"
 
+#include "geometry/polyhedron_contact.hpp"
+
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace kiln::fluid {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Distinct face planes of a convex polyhedron: coplanar triangles (a cube's two per face) give
-// one plane, so the inside test makes one comparison per face.
+// The polyhedron's planar faces (coplanar triangles merged, as the contact's features have
+// them), so the inside test makes one comparison per face.
 PlanesBody planes_of(const geometry::ConvexPolyhedron& p) {
-    PlanesBody out;
-    out.vertices = p.vertices;
-    const double scale = p.bounding_radius();
-    for (const auto& f : p.faces) {
-        const Vec3& a = p.vertices[f[0]];
-        const Vec3 n = (p.vertices[f[1]] - a).cross(p.vertices[f[2]] - a).normalized();
-        const double d = n.dot(a);
-        bool seen = false;
-        for (std::size_t k = 0; k < out.normals.size() && !seen; ++k) {
-            seen =
-                out.normals[k].dot(n) > 1.0 - 1e-12 && std::abs(out.offsets[k] - d) < 1e-12 * scale;
-        }
-        if (!seen) {
-            out.normals.push_back(n);
-            out.offsets.push_back(d);
-        }
-    }
-    return out;
+    geometry::PolyhedronFeatures f = geometry::polyhedron_features(p);
+    return PlanesBody{std::move(f.face_normals), std::move(f.face_offsets), std::move(f.vertices)};
 }
 
 struct BodyOf {
