@@ -2,6 +2,7 @@
 
 #include "geometry/polyhedron_contact.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -10,6 +11,10 @@ namespace kiln::fluid {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// A face whose normal's x component is at most this is parallel to the rows (docs/theory/fluid.md,
+// "Convex polyhedra: rows clipped by the faces").
+constexpr double kParallel = 1e-6;
 
 // The polyhedron's planar faces (coplanar triangles merged, as the contact's features have
 // them), so the inside test makes one comparison per face.
@@ -26,6 +31,95 @@ struct BodyOf {
 };
 
 } // namespace
+
+void pose_planes(const PlanesBody& body, const Mat3& rot, const Vec3& x, double h,
+                 PosedPlanes& out) {
+    const std::size_t nf = body.normals.size();
+    out.normal.resize(nf);
+    out.offset.resize(nf);
+    out.inv_rate.resize(nf);
+    out.to_body = rot.transpose();
+    out.centre = x;
+    out.step = h * out.to_body.col(0);
+    out.h = h;
+    for (std::size_t f = 0; f < nf; ++f) {
+        const Vec3 n = rot * body.normals[f];
+        out.normal[f] = n;
+        out.offset[f] = n.dot(x) + body.offsets[f];
+        // A face whose plane the rows cross at less than 1e-6 of a step per step is parallel.
+        out.inv_rate[f] = std::abs(n.x()) <= kParallel ? 0.0 : 1.0 / (h * n.x());
+    }
+}
+
+RowRun clip_row(const PlanesBody& body, const PosedPlanes& posed, const Vec3& start, long n) {
+    // Face f holds the row's points with a + t b <= 0, a = n . start - e (m), b = h n_x. A face
+    // the row crosses bounds t at -a / b. One it runs along (|n_x| <= kParallel) bounds nothing,
+    // cuts the whole row, or leaves it to the point tests when the row lies within round-off
+    // (1e-9 steps) of its plane.
+    const double tol = 1e-9 * posed.h;
+    const auto len = static_cast<double>(n);
+    double lo = 0.0;
+    double hi = len;
+    for (std::size_t f = 0; f < posed.normal.size(); ++f) {
+        const double a = posed.normal[f].dot(start) - posed.offset[f];
+        const double inv = posed.inv_rate[f];
+        if (inv == 0.0) {
+            const double b = posed.h * posed.normal[f].x();
+            const double low = a + std::min(0.0, b * len);
+            const double high = a + std::max(0.0, b * len);
+            if (low > tol) {
+                return {};
+            }
+            if (high >= -tol) {
+                return {0, -1, false};
+            }
+        } else if (inv > 0.0) {
+            hi = std::min(hi, -a * inv);
+        } else {
+            lo = std::max(lo, -a * inv);
+        }
+    }
+    return detail::settle_row(lo, hi, n, [&](long t) {
+        const Vec3 p0 = posed.to_body * (start - posed.centre);
+        return body.contains(p0 + static_cast<double>(t) * posed.step);
+    });
+}
+
+void ClumpBody::rows(std::span<const Vec3> centres, double ox, double h, double y, double z,
+                     long lo, long hi, std::vector<RowRun>& out) const {
+    out.clear();
+    for (std::size_t m = 0; m < spheres.size(); ++m) {
+        const Vec3& c = centres[m];
+        const double dy = y - c.y();
+        const double dz = z - c.z();
+        const double r = spheres[m].radius;
+        const double w2 = r * r - dy * dy - dz * dz;
+        if (w2 < 0.0) {
+            continue;
+        }
+        const double w = std::sqrt(w2);
+        const double a0 = std::ceil((c.x() - w - ox) / h - 0.5);
+        const double a1 = std::floor((c.x() + w - ox) / h - 0.5);
+        const auto first = static_cast<long>(std::max(a0, static_cast<double>(lo)));
+        const auto last = static_cast<long>(std::min(a1, static_cast<double>(hi)));
+        if (first <= last) {
+            out.push_back({first, last});
+        }
+    }
+    std::sort(out.begin(), out.end(),
+              [](const RowRun& p, const RowRun& q) { return p.first < q.first; });
+    std::size_t k = 0;
+    for (std::size_t j = 1; j < out.size(); ++j) {
+        if (out[j].first <= out[k].last + 1) {
+            out[k].last = std::max(out[k].last, out[j].last);
+        } else {
+            out[++k] = out[j];
+        }
+    }
+    if (!out.empty()) {
+        out.resize(k + 1);
+    }
+}
 
 DepositTemplate make_deposit_template(const geometry::ShapeTemplate& t) {
     return {std::visit(BodyOf{}, t.shape), t.volume, t.bounding_radius()};

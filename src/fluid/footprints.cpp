@@ -229,8 +229,78 @@ void scan_sphere(const TransferGrid& g, const SphereBody& s, const Vec3& x, cons
     }
 }
 
-// Runs of any body with an inside test: every sub-cell of the range that lies in the body's
-// bounding sphere (radius rb) is tested in the body frame.
+// Runs of a clump: per row the union of its members' chords, each by the sphere's rule
+// (ClumpBody::rows), from the members' world centres; O(members) per row.
+void scan_clump(const TransferGrid& g, const ClumpBody& body, const Vec3& x, const Mat3& rot,
+                const SubRange& r, Scan& scan, detail::ChunkBuffer& buf) {
+    const double h = g.sub_cell_size();
+    const Vec3& o = g.origin();
+    buf.centres.resize(body.spheres.size());
+    for (std::size_t m = 0; m < body.spheres.size(); ++m) {
+        buf.centres[m] = x + rot * body.spheres[m].centre;
+    }
+    for (long c = r.lo[2]; c <= r.hi[2]; ++c) {
+        const double z = o.z() + (static_cast<double>(c) + 0.5) * h;
+        for (long b = r.lo[1]; b <= r.hi[1]; ++b) {
+            const double y = o.y() + (static_cast<double>(b) + 0.5) * h;
+            body.rows(buf.centres, o.x(), h, y, z, r.lo[0], r.hi[0], buf.runs);
+            for (const RowRun& rr : buf.runs) {
+                scan.add_run(rr.first, rr.last, b, c);
+            }
+        }
+    }
+}
+
+// The runs of the sub-cells a0..a1 of row (b, c) that `body` contains, testing each sub-cell's
+// centre p0 + (a - a0) step (body frame).
+template <class Body>
+void scan_points(const Body& body, const Vec3& p0, const Vec3& step, long a0, long a1, long b,
+                 long c, Scan& scan) {
+    long run = -1;
+    for (long a = a0; a <= a1; ++a) {
+        const bool in = body.contains(p0 + static_cast<double>(a - a0) * step);
+        if (in && run < 0) {
+            run = a;
+        } else if (!in && run >= 0) {
+            scan.add_run(run, a - 1, b, c);
+            run = -1;
+        }
+    }
+    if (run >= 0) {
+        scan.add_run(run, a1, b, c);
+    }
+}
+
+// Runs of a convex polyhedron: each row of the world box that crosses its bounding sphere (radius
+// rb) clipped by the posed face planes (clip_row, O(faces) per row); a row running along a face
+// is tested sub-cell by sub-cell.
+void scan_planes(const TransferGrid& g, const PlanesBody& body, double rb, const Vec3& x,
+                 const Mat3& rot, const SubRange& r, Scan& scan, PosedPlanes& posed) {
+    const double h = g.sub_cell_size();
+    const Vec3& o = g.origin();
+    pose_planes(body, rot, x, h, posed);
+    const double sx = o.x() + (static_cast<double>(r.lo[0]) + 0.5) * h;
+    for (long c = r.lo[2]; c <= r.hi[2]; ++c) {
+        const double z = o.z() + (static_cast<double>(c) + 0.5) * h;
+        for (long b = r.lo[1]; b <= r.hi[1]; ++b) {
+            const double y = o.y() + (static_cast<double>(b) + 0.5) * h;
+            if ((y - x.y()) * (y - x.y()) + (z - x.z()) * (z - x.z()) > rb * rb) {
+                continue;
+            }
+            const Vec3 start(sx, y, z);
+            const RowRun rr = clip_row(body, posed, start, r.hi[0] - r.lo[0]);
+            if (!rr.decided) {
+                const Vec3 p0 = posed.to_body * (start - x);
+                scan_points(body, p0, posed.step, r.lo[0], r.hi[0], b, c, scan);
+            } else if (rr.first <= rr.last) {
+                scan.add_run(r.lo[0] + rr.first, r.lo[0] + rr.last, b, c);
+            }
+        }
+    }
+}
+
+// Runs of a superquadric: every sub-cell of the row's chord of the bounding sphere (radius rb)
+// tested in the body frame.
 template <class Body>
 void scan_body(const TransferGrid& g, const Body& body, double rb, const Vec3& x, const Mat3& rot,
                const SubRange& r, Scan& scan) {
@@ -254,19 +324,7 @@ void scan_body(const TransferGrid& g, const Body& body, double rb, const Vec3& x
             const Vec3 start =
                 Vec3(o.x() + (static_cast<double>(lo) + 0.5) * h, dy + x.y(), dz + x.z());
             const Vec3 p0 = rt * (start - x);
-            long run = -1;
-            for (long a = lo; a <= hi; ++a) {
-                const bool in = body.contains(p0 + static_cast<double>(a - lo) * step);
-                if (in && run < 0) {
-                    run = a;
-                } else if (!in && run >= 0) {
-                    scan.add_run(run, a - 1, b, c);
-                    run = -1;
-                }
-            }
-            if (run >= 0) {
-                scan.add_run(run, hi, b, c);
-            }
+            scan_points(body, p0, step, lo, hi, b, c, scan);
         }
     }
 }
@@ -310,14 +368,13 @@ ParticleResult deposit_one(const TransferGrid& g, const DepositTemplate& t, cons
         Scan scan(g, range, buf);
         if (const auto* s = std::get_if<SphereBody>(&t.body)) {
             scan_sphere(g, *s, x, range, scan);
+        } else if (const auto* cl = std::get_if<ClumpBody>(&t.body)) {
+            scan_clump(g, *cl, x, rot, range, scan, buf);
+        } else if (const auto* pl = std::get_if<PlanesBody>(&t.body)) {
+            scan_planes(g, *pl, t.bounding_radius, x, rot, range, scan, buf.posed);
         } else {
-            std::visit(
-                [&](const auto& body) {
-                    if constexpr (!std::is_same_v<std::decay_t<decltype(body)>, SphereBody>) {
-                        scan_body(g, body, t.bounding_radius, x, rot, range, scan);
-                    }
-                },
-                t.body);
+            scan_body(g, std::get<SuperquadricBody>(t.body), t.bounding_radius, x, rot, range,
+                      scan);
         }
         if (scan.total() > 0) {
             centroid = scan.centroid();

@@ -5,9 +5,11 @@
 // used for the porosity, the sources and the interpolation back (exchange.hpp).
 //
 // Rules (docs/theory/fluid.md):
-// - A particle's sub-cells are those whose centres lie inside it (spheres: chord intervals per
-//   sub-cell row; other shapes: the body-frame inside test at every sub-cell of the world box
-//   bounding the posed body).
+// - A particle's sub-cells are those whose centres lie inside it, found row by row along x over
+//   the rows crossing its bounding sphere: spheres by their chord, polyhedra by clipping the row
+//   against their face planes (the points of a row's ends within round-off are settled by the
+//   inside test), clumps by the union of their members' chords, superquadrics by the body-frame
+//   inside test at every sub-cell of the row's chord of the bounding sphere.
 // - Only sub-cells inside the domain count. A particle reaching out of the domain deposits the
 //   volume of its sub-cells inside it and spreads its sources over those (still conservative);
 //   it is counted as `clipped`.
@@ -55,6 +57,9 @@ struct ChunkBuffer {
     std::vector<std::int64_t> count;        // sub-cells per cell of a particle's local box
     std::vector<double> stencil;            // stencil weights on the local box
     std::vector<double> row;                // x weights of one sub-cell run
+    std::vector<RowRun> runs;               // a clump row's runs
+    std::vector<Vec3> centres;              // a clump's member centres (m, world frame)
+    PosedPlanes posed;                      // a polyhedron's face planes (world frame)
 };
 } // namespace detail
 

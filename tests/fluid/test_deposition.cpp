@@ -118,8 +118,8 @@ TEST(Deposition, TotalDoesNotDependOnTheCellFaces) {
 }
 
 TEST(Deposition, SphereChordsMatchTheInsideTest) {
-    // The sphere's chord path and the general path (a clump of one sphere) pick the same
-    // sub-cells at generic positions.
+    // The sphere's chord path and a clump of one sphere (its member's chord from the rotated
+    // member centre) pick the same sub-cells.
     const f::TransferGrid grid(Vec3::Zero(), {6, 6, 6}, 2e-3, 8);
     const auto sphere = t::sphere_template(1.3e-3);
     const auto one = kiln::geometry::make_template(
