@@ -81,7 +81,7 @@ void add_counters(benchmark::State& state, const f::Footprints& fp, std::size_t 
     for (const auto c : fp.sub_cells) {
         sub += static_cast<double>(c);
     }
-    state.counters["ns_per_particle"] =
+    state.counters["time_per_particle"] =
         benchmark::Counter(static_cast<double>(n), benchmark::Counter::kIsIterationInvariantRate |
                                                        benchmark::Counter::kInvert);
     state.counters["sub_cells"] = sub / static_cast<double>(n);
@@ -114,7 +114,7 @@ void BM_Interpolate(benchmark::State& state) {
         f::interpolate(fp, field, out, 1);
         benchmark::DoNotOptimize(out.data());
     }
-    state.counters["ns_per_particle"] = benchmark::Counter(
+    state.counters["time_per_particle"] = benchmark::Counter(
         kParticles, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_Interpolate)->Arg(4)->Arg(8)->Arg(16)->Unit(benchmark::kMicrosecond);
@@ -130,7 +130,7 @@ void BM_Spread(benchmark::State& state) {
         f::spread(fp, force, out, 1);
         benchmark::DoNotOptimize(out.data());
     }
-    state.counters["ns_per_particle"] = benchmark::Counter(
+    state.counters["time_per_particle"] = benchmark::Counter(
         kParticles, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_Spread)->Arg(4)->Arg(8)->Arg(16)->Unit(benchmark::kMicrosecond);
@@ -157,7 +157,7 @@ void BM_BedCoupling(benchmark::State& state) {
         f::interpolate(fp, cells, gas, threads);
         benchmark::DoNotOptimize(gas.data());
     }
-    state.counters["ns_per_particle"] = benchmark::Counter(
+    state.counters["time_per_particle"] = benchmark::Counter(
         kBed, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_BedCoupling)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMicrosecond);
