@@ -533,6 +533,7 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
             set_lane(l, pairs.at(0, 0));
         }
     }
+    V radius{}; // the lanes' particle radii (m)
     for (std::size_t g = 0; g < n; g += W) {
         const std::size_t m = std::min<std::size_t>(W, n - g);
         std::uint32_t is[W];
@@ -549,7 +550,8 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
             c.overlap[l] = wc.overlap;
             c.r_eff[l] = wc.r_eff;
             c.m_eff[l] = a.mass[is[l]];
-            c.lever_i[l] = a.radius[is[l]] - wc.overlap;
+            radius[l] = a.radius[is[l]];
+            c.lever_i[l] = radius[l] - wc.overlap;
             if (!one_pair) {
                 set_lane(l, pairs.at(material[is[l]], wall_material[wall_of[as[l]]]));
             }
@@ -563,6 +565,7 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
             c.s[q] = sh.c[q];
         }
         contact::evaluate_lanes<variant>(law, fn_floor, rolling, c, dt);
+        const V ratio = c.overlap / (2.0 * radius); // one division for the four lanes
         const RowsXY f = rows_xy(c.f[0], c.f[1]);
         const RowsXY ti = rows_xy(c.ti[0], c.ti[1]);
         const RowsXY s = rows_xy(c.s[0], c.s[1]);
@@ -571,7 +574,7 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
             add_to(a.torque[is[l]], ti.r[l], c.ti[2][l]);
             set(wall_shear[hs[l]], s.r[l], c.s[2][l]);
             energy += c.energy[l];
-            max_ratio = std::max(max_ratio, c.overlap[l] / (2.0 * a.radius[is[l]]));
+            max_ratio = std::max(max_ratio, ratio[l]);
         }
     }
     energy_sum = energy;
@@ -587,6 +590,11 @@ template <unsigned base, class Run>
 decltype(auto) with_cheapest_variant(const PairTable& pairs, double rolling, Run&& run) {
     constexpr unsigned s = contact::shared_damping_root;
     constexpr unsigned r = contact::without_rolling;
+    constexpr unsigned f = contact::with_friction;
+    if (pairs.size() == 1 && pairs.at(0, 0).friction > 0.0) {
+        return rolling == 0.0 ? run(std::integral_constant<unsigned, base | s | r | f>{})
+                              : run(std::integral_constant<unsigned, base | s | f>{});
+    }
     if (pairs.size() == 1) {
         return rolling == 0.0 ? run(std::integral_constant<unsigned, base | s | r>{})
                               : run(std::integral_constant<unsigned, base | s>{});
