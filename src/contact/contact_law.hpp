@@ -236,6 +236,9 @@ enum LaneVariant : unsigned {
     /// (set by the caller) instead of n: those are known before the square root of the distance,
     /// so the history's chain starts earlier (other round-off).
     project_by_distance = 8,
+    /// Every lane has friction (mu > 0, set by the caller): the products by the friction switch,
+    /// which is then 1, are left out (exact either way).
+    with_friction = 16,
 };
 
 /// Evaluates the law on c; written without branches (variant `branch_free`), so that it runs on
@@ -308,12 +311,17 @@ template <unsigned variant = branch_free, class Law, class T>
     const T on = select(c.mu > zero, one, zero);
     if ((variant & cap_when_sliding) != 0 && !lanes::any(slide)) {
         // What the selects below give when no lane slides (scale = on), without the divider.
-        ft0 *= on;
-        ft1 *= on;
-        ft2 *= on;
-        c.s[0] = on * s0;
-        c.s[1] = on * s1;
-        c.s[2] = on * s2;
+        if constexpr ((variant & with_friction) == 0) {
+            ft0 *= on;
+            ft1 *= on;
+            ft2 *= on;
+            s0 *= on;
+            s1 *= on;
+            s2 *= on;
+        }
+        c.s[0] = s0;
+        c.s[1] = s1;
+        c.s[2] = s2;
     } else {
         const T capped = cap / vsqrt(select(ftsq > zero, ftsq, one));
         const T scale = on * select(slide, capped, one);

@@ -169,15 +169,23 @@ struct InnerChunk {
 /// the entries closer than the inner gap (squared distance below inner->near2, the touching ones
 /// included) are written to `inner` (count and flags set). Returns the first entry not taken.
 template <bool with_rows, bool build = false>
-std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t end,
-                             const ActiveList& active, std::size_t& n_active, std::uint32_t* rows,
+std::size_t touching_entries(const PairArrays& arrays, std::size_t begin, std::size_t end,
+                             const ActiveList& list, std::size_t& n_active, std::uint32_t* rows,
                              std::uint32_t zero_row, InnerChunk* inner = nullptr) {
     static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 records are packed");
+    // Local copies of what the loop reads through references: the intrinsics' stores may alias any
+    // memory, so GCC would load the pointers again after each of them (the same operations).
+    const PairArrays a = arrays;
+    const ActiveList active = list;
+    InnerChunk out{};
+    if constexpr (build) {
+        out = *inner;
+    }
     std::size_t n = n_active;
     std::size_t k = begin;
     std::size_t c = 0; // inner entries so far (build)
     if constexpr (build) {
-        std::fill_n(inner->was, (end - begin) / 4, std::uint8_t{0});
+        std::fill_n(out.was, (end - begin) / 4, std::uint8_t{0});
     }
     for (; k + 4 <= end; k += 4) {
         const std::uint32_t* is = a.owner + k;
@@ -223,15 +231,14 @@ std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t
         }
         n += static_cast<std::size_t>(std::popcount(m));
         if constexpr (build) {
-            const __m256d near =
-                _mm256_cmp_pd(dist2, _mm256_loadu_pd(inner->near2 + k), _CMP_LT_OQ);
+            const __m256d near = _mm256_cmp_pd(dist2, _mm256_loadu_pd(out.near2 + k), _CMP_LT_OQ);
             const unsigned mn = m | static_cast<unsigned>(_mm256_movemask_pd(near));
             for (unsigned l = 0; l < 4; ++l) {
-                inner->k[c] = static_cast<std::uint32_t>(k + l);
-                inner->i[c] = is[l];
-                inner->j[c] = js[l];
-                inner->rsum2[c] = a.rsum2[k + l];
-                inner->was[c / 4] |= static_cast<std::uint8_t>(((m >> l) & 1U) << (c % 4));
+                out.k[c] = static_cast<std::uint32_t>(k + l);
+                out.i[c] = is[l];
+                out.j[c] = js[l];
+                out.rsum2[c] = a.rsum2[k + l];
+                out.was[c / 4] |= static_cast<std::uint8_t>(((m >> l) & 1U) << (c % 4));
                 c += (mn >> l) & 1U;
             }
         }
@@ -250,9 +257,14 @@ std::size_t touching_entries(const PairArrays& a, std::size_t begin, std::size_t
 /// With `rows`, the rows of the inner entries are set; the other entries keep the zero row
 /// written when the inner list was built.
 template <bool with_rows>
-void inner_touching_entries(const PairArrays& a, InnerChunk& in, std::size_t begin,
-                            const ActiveList& active, std::size_t& n_active, std::uint32_t* rows,
+void inner_touching_entries(const PairArrays& arrays, const InnerChunk& chunk, std::size_t begin,
+                            const ActiveList& list, std::size_t& n_active, std::uint32_t* rows,
                             std::uint32_t zero_row) {
+    // Local copies of what the loop reads through references: the intrinsics' stores may alias any
+    // memory, so GCC would load the pointers again after each of them (the same operations).
+    const PairArrays a = arrays;
+    const InnerChunk in = chunk;
+    const ActiveList active = list;
     std::size_t n = n_active;
     std::size_t c = 0;
     for (; c + 4 <= in.count; c += 4) {
@@ -318,10 +330,16 @@ void inner_touching_entries(const PairArrays& a, InnerChunk& in, std::size_t beg
 /// law's contact::LaneVariant (without_rolling only when rolling is 0).
 template <unsigned variant, class Law, bool direct, bool uniform>
 std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std::int32_t* material,
-                              double fn_floor, double rolling, double dt, const PairArrays& a,
-                              const ActiveList& active, std::size_t n, std::size_t first_row,
-                              double& energy, double& max_ratio) {
+                              double fn_floor, double rolling, double dt, const PairArrays& arrays,
+                              const ActiveList& list, std::size_t n, std::size_t first_row,
+                              double& energy_sum, double& max_ratio_of) {
     constexpr int W = 4;
+    // Local copies of what the loop reads through references: the intrinsics' stores may alias any
+    // memory, so GCC would load the pointers again after each of them (the same operations).
+    const PairArrays a = arrays;
+    const ActiveList active = list;
+    double energy = energy_sum;
+    double max_ratio = max_ratio_of;
     using V = contact::lanes::V4;
     using contact::lanes::select;
     contact::ContactLanes<V> c{};
@@ -467,6 +485,8 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
     for (int l = 0; l < W; ++l) {
         max_ratio = std::max(max_ratio, top[l] / bottom[l]);
     }
+    energy_sum = energy;
+    max_ratio_of = max_ratio;
     return g;
 }
 
@@ -483,9 +503,14 @@ template <unsigned variant, class Law>
 void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
                  const int* wall_material, double fn_floor, double rolling, double dt,
                  const WallContact* geo, const std::uint32_t* active, const std::uint32_t* wall_of,
-                 std::size_t n, std::size_t nw, const PairArrays& a, Vec3* wall_shear,
-                 double& energy, double& max_ratio) {
+                 std::size_t n, std::size_t nw, const PairArrays& arrays, Vec3* wall_shear,
+                 double& energy_sum, double& max_ratio_of) {
     constexpr int W = 4;
+    // Local copies of what the loop reads through references: the intrinsics' stores may alias any
+    // memory, so GCC would load the pointers again after each of them (the same operations).
+    const PairArrays a = arrays;
+    double energy = energy_sum;
+    double max_ratio = max_ratio_of;
     using V = contact::lanes::V4;
     contact::ContactLanes<V> c{};
     for (int q = 0; q < 3; ++q) {
@@ -508,6 +533,7 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
             set_lane(l, pairs.at(0, 0));
         }
     }
+    V radius{}; // the lanes' particle radii (m)
     for (std::size_t g = 0; g < n; g += W) {
         const std::size_t m = std::min<std::size_t>(W, n - g);
         std::uint32_t is[W];
@@ -524,7 +550,8 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
             c.overlap[l] = wc.overlap;
             c.r_eff[l] = wc.r_eff;
             c.m_eff[l] = a.mass[is[l]];
-            c.lever_i[l] = a.radius[is[l]] - wc.overlap;
+            radius[l] = a.radius[is[l]];
+            c.lever_i[l] = radius[l] - wc.overlap;
             if (!one_pair) {
                 set_lane(l, pairs.at(material[is[l]], wall_material[wall_of[as[l]]]));
             }
@@ -538,6 +565,7 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
             c.s[q] = sh.c[q];
         }
         contact::evaluate_lanes<variant>(law, fn_floor, rolling, c, dt);
+        const V ratio = c.overlap / (2.0 * radius); // one division for the four lanes
         const RowsXY f = rows_xy(c.f[0], c.f[1]);
         const RowsXY ti = rows_xy(c.ti[0], c.ti[1]);
         const RowsXY s = rows_xy(c.s[0], c.s[1]);
@@ -546,9 +574,11 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
             add_to(a.torque[is[l]], ti.r[l], c.ti[2][l]);
             set(wall_shear[hs[l]], s.r[l], c.s[2][l]);
             energy += c.energy[l];
-            max_ratio = std::max(max_ratio, c.overlap[l] / (2.0 * a.radius[is[l]]));
+            max_ratio = std::max(max_ratio, ratio[l]);
         }
     }
+    energy_sum = energy;
+    max_ratio_of = max_ratio;
 }
 #endif
 
@@ -560,6 +590,11 @@ template <unsigned base, class Run>
 decltype(auto) with_cheapest_variant(const PairTable& pairs, double rolling, Run&& run) {
     constexpr unsigned s = contact::shared_damping_root;
     constexpr unsigned r = contact::without_rolling;
+    constexpr unsigned f = contact::with_friction;
+    if (pairs.size() == 1 && pairs.at(0, 0).friction > 0.0) {
+        return rolling == 0.0 ? run(std::integral_constant<unsigned, base | s | r | f>{})
+                              : run(std::integral_constant<unsigned, base | s | f>{});
+    }
     if (pairs.size() == 1) {
         return rolling == 0.0 ? run(std::integral_constant<unsigned, base | s | r>{})
                               : run(std::integral_constant<unsigned, base | s>{});

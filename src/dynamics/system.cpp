@@ -885,7 +885,7 @@ void System::note_body_onset(const BodyContactKey& key, const Vec3& n, const Vec
 // building new inner lists (not within inner_holdoff steps of the last ones being dropped, so that
 // a moving bed does not pay a build at every step). After a filter on the inner lists, touched_
 // is stale and set to unknown.
-void System::choose_filter(std::size_t pair_units) {
+void System::choose_filter([[maybe_unused]] std::size_t pair_units) {
     filter_ = Filter::all;
 #if defined(__AVX2__) && defined(__FMA__)
     if (!has_bodies_ && inner_gap_ > 0.0 && use_inner_) {

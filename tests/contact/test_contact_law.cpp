@@ -197,12 +197,31 @@ template <class V, class Law> void lanes_match_one_contact(const Law& law) {
         }
         evaluate_lanes<cap_when_sliding | shared_damping_root | project_by_distance>(
             law, fn_floor, rolling, projected, 1e-5);
+        // With friction in every lane, the variant without the friction switch claims the same
+        // bits too (compared below when no lane is frictionless).
+        ContactLanes<V> friction = lanes;
+        bool all_friction = true;
+        for (int l = 0; l < w; ++l) {
+            all_friction = all_friction && one[l].mu > 0.0;
+        }
         if (rolling == 0.0) {
             evaluate_lanes<cap_when_sliding | without_rolling>(law, fn_floor, rolling, fast, 1e-5);
+            evaluate_lanes<cap_when_sliding | without_rolling | with_friction>(
+                law, fn_floor, rolling, friction, 1e-5);
         } else {
             evaluate_lanes<cap_when_sliding>(law, fn_floor, rolling, fast, 1e-5);
+            evaluate_lanes<cap_when_sliding | with_friction>(law, fn_floor, rolling, friction,
+                                                             1e-5);
         }
         evaluate_lanes(law, fn_floor, rolling, lanes, 1e-5);
+        for (int l = 0; l < w && all_friction; ++l) {
+            for (int q = 0; q < 3; ++q) {
+                EXPECT_EQ(friction.f[q][l], fast.f[q][l]) << "contact " << it << " lane " << l;
+                EXPECT_EQ(friction.ti[q][l], fast.ti[q][l]) << "contact " << it << " lane " << l;
+                EXPECT_EQ(friction.tj[q][l], fast.tj[q][l]) << "contact " << it << " lane " << l;
+                EXPECT_EQ(friction.s[q][l], fast.s[q][l]) << "contact " << it << " lane " << l;
+            }
+        }
         for (int l = 0; l < w; ++l) {
             for (int q = 0; q < 3; ++q) {
                 EXPECT_EQ(fast.f[q][l], lanes.f[q][l]) << "contact " << it << " lane " << l;

@@ -426,9 +426,15 @@ TEST(System, InnerListGivesTheBitsOfTheFullFilter) {
         EXPECT_GT(full.neighbour_builds(), 5);
         EXPECT_GT(contacts, 0);
         EXPECT_EQ(full.inner_list_steps(), 0);
+#if defined(__AVX2__) && defined(__FMA__)
         EXPECT_GT(inner.inner_list_steps(), 500);   // the inner list was used (985 of 4000)
         EXPECT_GT(inner.inner_list_loosened(), 20); // and loose particles joined it
         EXPECT_GT(restarted->inner_list_steps(), 300);
+#else
+        // Without AVX2 and FMA there is no inner list (System::choose_filter): every step takes
+        // the full filter, and the comparison above is of two identical runs.
+        EXPECT_EQ(inner.inner_list_steps(), 0);
+#endif
     }
 }
 
