@@ -568,7 +568,12 @@ PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b,
 /// spanning a face of the Minkowski difference gives a larger one; `second` (m) is raised to the
 /// largest of the other values met (the runner-up, for the memory's tie test).
 void edge_stage(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const Relative& r,
-                double& best, Vec3& best_m, PolyhedronContact& c, double& second) {
+                double& best_out, Vec3& best_m, PolyhedronContact& c, double& second_out) {
+    double best = best_out;
+    double second = second_out;
+    int iterations = c.iterations;
+    bool raised = false;
+    Vec3 winner_m = best_m;
     for (const int ia : r.edges_a) {
         const auto& ea = fa.edges[static_cast<std::size_t>(ia)];
         const Vec3& na0 = fa.face_normals[static_cast<std::size_t>(ea[2])];
@@ -583,7 +588,7 @@ void edge_stage(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, cons
                 continue;
             }
             const auto& eb = fb.edges[k];
-            ++c.iterations;
+            ++iterations;
             const Vec3& pb = r.vb[static_cast<std::size_t>(eb[0])];
             const Vec3 db = r.vb[static_cast<std::size_t>(eb[1])] - pb;
             Vec3 n = da.cross(db);
@@ -599,13 +604,20 @@ void edge_stage(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, cons
             if (sep > best) {
                 second = best;
                 best = sep;
-                best_m = -n;
-                c.feature = CommonPlaneFeature::kEdgeEdge;
+                winner_m = -n;
+                raised = true;
             } else {
                 second = std::max(second, sep);
             }
         }
     }
+    if (raised) {
+        best_m = winner_m;
+        c.feature = CommonPlaneFeature::kEdgeEdge;
+    }
+    best_out = best;
+    second_out = second;
+    c.iterations = iterations;
 }
 
 /// Separations (m) along the face planes of `t`'s other body that can be the largest, as the
@@ -878,18 +890,24 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
         bound[k] = memo.values[k] + drift_b + 2.0 * tol;
     }
     face_separations(tb, bound, floor, sep);
-    for (std::size_t k = 0; k < nfa; ++k) {
-        ++c.iterations;
-        if (sep[k] > best) {
-            second = best;
-            best = sep[k];
-            best_m = -fa.face_normals[k];
-            c.feature = CommonPlaneFeature::kFaceOfA;
-        } else {
-            second = std::max(second, sep[k]);
+    // The running values in locals (through the references they were stored at every face).
+    c.iterations += static_cast<int>(nfa + nfb);
+    int face = -1; // the face that raised the best last (A's k as k, B's as nfa + k)
+    double top = best;
+    {
+        double run = second;
+        for (std::size_t k = 0; k < nfa; ++k) {
+            if (sep[k] > top) {
+                run = top;
+                top = sep[k];
+                face = static_cast<int>(k);
+            } else {
+                run = std::max(run, sep[k]);
+            }
         }
+        second = run;
     }
-    if (!(best < -tol)) {
+    if (!(top < -tol)) {
         return false;
     }
     relative_faces(fb, r);
@@ -898,17 +916,27 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
     for (std::size_t k = 0; k < nfb; ++k) {
         bound[k] = memo.values[nfa + k] + drift_a + 2.0 * tol;
     }
-    face_separations(ta, bound, std::max(floor, best), sep);
-    for (std::size_t k = 0; k < nfb; ++k) {
-        ++c.iterations;
-        if (sep[k] > best) {
-            second = best;
-            best = sep[k];
-            best_m = r.nb[k];
-            c.feature = CommonPlaneFeature::kFaceOfB;
-        } else {
-            second = std::max(second, sep[k]);
+    face_separations(ta, bound, std::max(floor, top), sep);
+    {
+        double run = second;
+        for (std::size_t k = 0; k < nfb; ++k) {
+            if (sep[k] > top) {
+                run = top;
+                top = sep[k];
+                face = static_cast<int>(nfa + k);
+            } else {
+                run = std::max(run, sep[k]);
+            }
         }
+        second = run;
+    }
+    best = top;
+    if (face >= 0 && static_cast<std::size_t>(face) < nfa) {
+        best_m = -fa.face_normals[static_cast<std::size_t>(face)];
+        c.feature = CommonPlaneFeature::kFaceOfA;
+    } else if (face >= 0) {
+        best_m = r.nb[static_cast<std::size_t>(face) - nfa];
+        c.feature = CommonPlaneFeature::kFaceOfB;
     }
     if (!(best < -tol)) {
         return false;
