@@ -409,8 +409,12 @@ ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase m
                 return false;
             }
             near_support(n->pa, -c.normal, c.depth, n->va);
-            near_support(n->pb, c.normal, c.depth, n->vb);
             n->known = true;
+            if (n->va.size() == 1) { // a vertex of a: pair_point reads neither b's list nor
+                n->vb.clear();       // the patch
+                return false;
+            }
+            near_support(n->pb, c.normal, c.depth, n->vb);
             return pair_point_needs_patch(n->va, n->vb);
         };
         pc = memo != nullptr ? geometry::polyhedron_contact(pa, pb, need, *memo)
