@@ -417,8 +417,8 @@ ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase m
             near_support(n->pb, c.normal, c.depth, n->vb);
             return pair_point_needs_patch(n->va, n->vb);
         };
-        pc = memo != nullptr ? geometry::polyhedron_contact(pa, pb, need, *memo)
-                             : geometry::polyhedron_contact(pa, pb, need);
+        // Only the point is read here: the points and the patch polygon are not built.
+        pc = geometry::polyhedron_contact_point(pa, pb, need, memo);
         out.converged = pc.converged;
         if (pc.converged && !pc.touching && pc.depth < 0.0 && sep != nullptr) {
             *sep = pc.normal; // the common plane of the largest gap

@@ -471,9 +471,10 @@ PlaneDepth plane_depth(const PolyhedronFeatures& fa, const Relative& r, const Ve
 }
 
 /// Points and patch for the normal m (unit, from B to A), all in A's body frame; the result's
-/// vectors are converted to the world frame of A at the end.
+/// vectors are converted to the world frame of A at the end. `point_only`: the points and the
+/// patch polygon are left empty (depth, normal, point and patch_area the same numbers).
 PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b, const Relative& r,
-                             const Vec3& m) {
+                             const Vec3& m, bool point_only = false) {
     const PolyhedronFeatures& fa = *a.shape;
     const PolyhedronFeatures& fb = *b.shape;
     const double scale = fa.radius + fb.radius;
@@ -550,6 +551,9 @@ PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b,
     }
     c.normal = a.q * m;
     c.point = a.x + a.q * point_a;
+    if (point_only) {
+        return c;
+    }
     c.points.reserve(pts.size());
     for (const Vec3& p : pts) {
         c.points.emplace_back(a.x + a.q * p);
@@ -1121,9 +1125,10 @@ bool full_search(const PosedPolyhedron& a, const PosedPolyhedron& b, detail::Fac
 
 /// The fast common plane; the patch as `with_patch` says, or (with `need_patch`) as it decides.
 /// `scan`: which face stages (see detail::FaceScan).
+/// `point_only`: points and patch polygon left empty (see patch_in_a).
 PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& b, bool with_patch,
                                const PatchTest* need_patch, detail::FaceScan scan,
-                               PlaneMemo* memo = nullptr) {
+                               PlaneMemo* memo = nullptr, bool point_only = false) {
     PolyhedronContact c;
     const PolyhedronFeatures& fa = *a.shape;
     const PolyhedronFeatures& fb = *b.shape;
@@ -1187,7 +1192,7 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
             return c;
         }
     }
-    PolyhedronContact p = patch_in_a(a, b, r, best_m);
+    PolyhedronContact p = patch_in_a(a, b, r, best_m, point_only);
     p.feature = c.feature;
     p.iterations = c.iterations;
     return p;
@@ -1222,6 +1227,11 @@ PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhe
 PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b,
                                      const PatchTest& need_patch, PlaneMemo& memo) {
     return common_plane(a, b, true, &need_patch, detail::FaceScan::automatic, &memo);
+}
+
+PolyhedronContact polyhedron_contact_point(const PosedPolyhedron& a, const PosedPolyhedron& b,
+                                           const PatchTest& need_patch, PlaneMemo* memo) {
+    return common_plane(a, b, true, &need_patch, detail::FaceScan::automatic, memo, true);
 }
 
 PlaneMemoCounters& plane_memo_counters() {
