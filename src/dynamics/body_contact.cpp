@@ -362,9 +362,7 @@ ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase m
     // again, so it goes straight to the exact query, which finds a pair apart too.
     // The cached direction's gap from heights alone (polyhedron_overlap_along): equal to the
     // support points' form to round-off, far below the margin, so the same pairs are proved apart.
-    if (sep != nullptr && sep->squaredNorm() > 0.0 &&
-        geometry::polyhedron_overlap_along(pa, pb, *sep) <
-            -kSeparationMargin * (a.radius + b.radius)) {
+    if (sep != nullptr && sep->squaredNorm() > 0.0 && polyhedra_apart_along(a, b, *sep)) {
         out.proved_apart = true;
         return out;
     }
@@ -596,6 +594,13 @@ ElementContact polyhedron_wall(const Element& a, const WallShape& w) {
 }
 
 } // namespace
+
+bool polyhedra_apart_along(const Element& a, const Element& b, const Vec3& sep) {
+    const geometry::PosedPolyhedron pa{a.poly, a.centre, a.q};
+    const geometry::PosedPolyhedron pb{b.poly, b.centre, b.q};
+    return geometry::polyhedron_overlap_along(pa, pb, sep) <
+           -kSeparationMargin * (a.radius + b.radius);
+}
 
 double equivalent_radius(const geometry::ShapeTemplate& t) {
     return std::cbrt(3.0 * t.volume / (4.0 * std::numbers::pi));

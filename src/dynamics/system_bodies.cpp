@@ -707,6 +707,37 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 // directions"); it only saves work, the answer is the same without it.
                 const bool single =
                     element_begin_[a + 1] - a0 == 1 && element_begin_[b + 1] - b0 == 1;
+                // Two single polyhedra with a cached direction (apart at their last query): the
+                // bounding-sphere tests of the loop below, in its order, then the cached
+                // direction's test as element_contact runs it, without copying the elements or
+                // assembling the query (most such entries are near misses proved apart here).
+                // Otherwise the loop below runs as before.
+                if (single && separation_cache_ && !(member_c_[a0].r > 0.0) &&
+                    !(member_c_[b0].r > 0.0) && sep_dirs_[k].squaredNorm() > 0.0) {
+                    const Element& A = elements_[a0];
+                    const Element& B = elements_[b0];
+                    if (A.kind == Element::Kind::polyhedron &&
+                        B.kind == Element::Kind::polyhedron) {
+                        const double rb = B.radius + p_.radius[a];
+                        if (!((B.centre - p_.x[a]).squaredNorm() < rb * rb)) {
+                            return;
+                        }
+                        const double rab = A.radius + p_.radius[b];
+                        if ((A.centre - p_.x[b]).squaredNorm() >= rab * rab) {
+                            return;
+                        }
+                        const double re = A.radius + B.radius;
+                        if ((A.centre - B.centre).squaredNorm() >= re * re) {
+                            return; // bounding spheres apart: no contact, no history
+                        }
+                        if (find_old(ContactGroup(0, k, 0, 0), 0) == nullptr &&
+                            polyhedra_apart_along(A, B, sep_dirs_[k])) {
+                            ++np_.calls; // the counts of element_contact's answer
+                            ++separation_skips_;
+                            return;
+                        }
+                    }
+                }
                 // Elements of b that reach into a's bounding sphere (a clump pair touches with a
                 // few of its members: 12 x 12 candidate pairs become about 2 x 2).
                 near_b.clear();
