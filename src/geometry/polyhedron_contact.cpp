@@ -776,17 +776,31 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
 } // namespace
 
 double polyhedron_overlap_along(const PosedPolyhedron& a, const PosedPolyhedron& b, const Vec3& m) {
+    // The largest height of a body's vertices along d, in four running maxima (the largest of a
+    // set does not depend on the order it is taken in): a chain of dependent maxima, one per
+    // vertex, was the loop's critical path (`cylinder_16`: 32 vertices per body).
+    const auto top = [](const std::vector<Vec3>& vs, const Vec3& d) {
+        constexpr double lowest = -std::numeric_limits<double>::infinity();
+        double h0 = lowest;
+        double h1 = lowest;
+        double h2 = lowest;
+        double h3 = lowest;
+        const std::size_t n = vs.size();
+        std::size_t i = 0;
+        for (; i + 4 <= n; i += 4) {
+            h0 = std::max(h0, d.dot(vs[i]));
+            h1 = std::max(h1, d.dot(vs[i + 1]));
+            h2 = std::max(h2, d.dot(vs[i + 2]));
+            h3 = std::max(h3, d.dot(vs[i + 3]));
+        }
+        for (; i < n; ++i) {
+            h0 = std::max(h0, d.dot(vs[i]));
+        }
+        return std::max(std::max(h0, h1), std::max(h2, h3));
+    };
     const Vec3 mb = b.q.conjugate() * m;
     const Vec3 ma = a.q.conjugate() * m;
-    double hb = -std::numeric_limits<double>::infinity();
-    for (const Vec3& v : b.shape->vertices) {
-        hb = std::max(hb, mb.dot(v));
-    }
-    double ha = -std::numeric_limits<double>::infinity();
-    for (const Vec3& v : a.shape->vertices) {
-        ha = std::max(ha, -ma.dot(v));
-    }
-    return m.dot(b.x - a.x) + hb + ha;
+    return m.dot(b.x - a.x) + top(b.shape->vertices, mb) + top(a.shape->vertices, -ma);
 }
 
 PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b,
