@@ -30,6 +30,28 @@ constexpr double kMemoDrift = 0.01;
 
 thread_local PlaneMemoCounters memo_counters;
 
+/// The largest over k < n of min(d0[k], d1[k]), in four running maxima (the largest of a set does
+/// not depend on the order it is taken in; one chain of dependent maxima was the refill's critical
+/// path). -infinity for n = 0.
+double largest_of_pair_minima(const double* d0, const double* d1, std::size_t n) {
+    constexpr double lowest = -std::numeric_limits<double>::infinity();
+    double h0 = lowest;
+    double h1 = lowest;
+    double h2 = lowest;
+    double h3 = lowest;
+    std::size_t k = 0;
+    for (; k + 4 <= n; k += 4) {
+        h0 = std::max(h0, std::min(d0[k], d1[k]));
+        h1 = std::max(h1, std::min(d0[k + 1], d1[k + 1]));
+        h2 = std::max(h2, std::min(d0[k + 2], d1[k + 2]));
+        h3 = std::max(h3, std::min(d0[k + 3], d1[k + 3]));
+    }
+    for (; k < n; ++k) {
+        h0 = std::max(h0, std::min(d0[k], d1[k]));
+    }
+    return std::max(std::max(h0, h1), std::max(h2, h3));
+}
+
 /// Is the memory's certificate vertex still inside the other body by more than tol (m)? (B's
 /// planes in r: relative_faces done; -1: no vertex.)
 bool memo_inside(const PolyhedronFeatures& fa, const Relative& r, int vertex, double tol) {
@@ -104,10 +126,15 @@ void refill_memo(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, con
     const std::vector<double>& dist_b = r.full_tables ? r.dist_b.dist : own_b;
     const std::vector<double>& dist_a = r.full_tables ? r.dist_a.dist : own_a;
     // Separation along each face: the smallest distance in its column.
+    // (Row by row: an index modulo nf per entry was an integer division per distance.)
     const auto columns = [](const std::vector<double>& dist, std::size_t nf, double* out) {
         std::fill(out, out + nf, std::numeric_limits<double>::infinity());
-        for (std::size_t i = 0; i < dist.size(); ++i) {
-            out[i % nf] = std::min(out[i % nf], dist[i]);
+        const std::size_t rows = dist.size() / nf;
+        for (std::size_t i = 0; i < rows; ++i) {
+            const double* d = dist.data() + i * nf;
+            for (std::size_t k = 0; k < nf; ++k) {
+                out[k] = std::min(out[k], d[k]);
+            }
         }
     };
     columns(dist_b, nfa, memo.values.data());
@@ -122,11 +149,8 @@ void refill_memo(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, con
             const auto i1 = static_cast<std::size_t>(edges[e][1]);
             const double* d0 = dist.data() + i0 * nf;
             const double* d1 = dist.data() + i1 * nf;
-            double m = std::sqrt(segment_point_distance2(v[i0], v[i1], centre)) - radius;
-            for (std::size_t k = 0; k < nf; ++k) {
-                m = std::max(m, std::min(d0[k], d1[k]));
-            }
-            out[e] = m;
+            const double m = std::sqrt(segment_point_distance2(v[i0], v[i1], centre)) - radius;
+            out[e] = std::max(m, largest_of_pair_minima(d0, d1, nf));
         }
     };
     double* stored_edges = memo.values.data() + nfa + nfb;
@@ -142,7 +166,7 @@ void refill_memo(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, con
                           int base) {
         for (std::size_t i = 0; i < nv; ++i) {
             const double* d = dist.data() + i * nf;
-            const double top = *std::max_element(d, d + nf);
+            const double top = largest_of_pair_minima(d, d, nf);
             if (top < deepest) {
                 deepest = top;
                 memo.inside = base + static_cast<int>(i);
