@@ -6,8 +6,10 @@
 #include "geometry/polyhedron_search.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -283,8 +285,21 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
     // The prune from the stored distances (the full search's reach expression).
     const double reach = -best + 1e-9 * (fa.radius + fb.radius);
     // An edge is dropped when its stored distance, less the drift and the tolerance, exceeds the
-    // reach; written without a branch (most edges are dropped, the rest in no pattern).
+    // reach; written without a branch (most edges are dropped, the rest in no pattern). Up to 64
+    // edges, one bit per kept edge first (comparisons independent of each other), then the kept
+    // ones listed in order: appending at a running count made every comparison wait for the last.
     const auto keep = [](const double* stored, std::size_t n, double bar, std::vector<int>& kept) {
+        if (n <= 64) {
+            std::uint64_t mask = 0;
+            for (std::size_t e = 0; e < n; ++e) {
+                mask |= static_cast<std::uint64_t>(!(stored[e] > bar)) << e;
+            }
+            kept.clear();
+            for (; mask != 0; mask &= mask - 1) {
+                kept.push_back(std::countr_zero(mask));
+            }
+            return;
+        }
         kept.resize(n);
         int* out = kept.data();
         std::size_t m = 0;
