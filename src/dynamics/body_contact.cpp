@@ -596,10 +596,19 @@ ElementContact polyhedron_wall(const Element& a, const WallShape& w) {
 } // namespace
 
 bool polyhedra_apart_along(const Element& a, const Element& b, const Vec3& sep) {
+    double overlap = 0.0;
+    return polyhedra_apart_along(a, b, sep, overlap);
+}
+
+bool polyhedra_apart_along(const Element& a, const Element& b, const Vec3& sep, double& overlap) {
     const geometry::PosedPolyhedron pa{a.poly, a.centre, a.q};
     const geometry::PosedPolyhedron pb{b.poly, b.centre, b.q};
-    return geometry::polyhedron_overlap_along(pa, pb, sep) <
-           -kSeparationMargin * (a.radius + b.radius);
+    overlap = geometry::polyhedron_overlap_along(pa, pb, sep);
+    return overlap < -kSeparationMargin * (a.radius + b.radius);
+}
+
+double polyhedra_separation_margin(const Element& a, const Element& b) {
+    return kSeparationMargin * (a.radius + b.radius);
 }
 
 double equivalent_radius(const geometry::ShapeTemplate& t) {

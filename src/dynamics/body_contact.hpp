@@ -135,6 +135,13 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
 /// before assembling the query (the step loop, for a pair that was apart at its last query).
 [[nodiscard]] bool polyhedra_apart_along(const Element& a, const Element& b, const Vec3& sep);
 
+/// As polyhedra_apart_along, also returning the overlap along `sep` it compared (m).
+[[nodiscard]] bool polyhedra_apart_along(const Element& a, const Element& b, const Vec3& sep,
+                                         double& overlap);
+
+/// Margin of polyhedra_apart_along (m): the overlap along the direction must lie below minus this.
+[[nodiscard]] double polyhedra_separation_margin(const Element& a, const Element& b);
+
 /// Effective radius (m) of element a against a flat wall of unit normal n (from the wall to a,
 /// world frame): a sphere's radius, a polyhedron's equivalent radius, a superquadric's R* at its
 /// deepest point (as element_wall_contact on a plane).

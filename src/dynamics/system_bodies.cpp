@@ -695,6 +695,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             if (plane_memos_.size() < sep_dirs_.size()) {
                 plane_memos_.resize(sep_dirs_.size());
             }
+            if (sep_proofs_.size() < sep_dirs_.size()) {
+                sep_proofs_.resize(sep_dirs_.size());
+            }
             const auto general_entry = [&](std::uint32_t k, std::uint32_t a, std::uint32_t b) {
                 const double rsum = p_.radius[a] + p_.radius[b];
                 if ((p_.x[a] - p_.x[b]).squaredNorm() >= rsum * rsum) {
@@ -730,13 +733,45 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         if ((A.centre - B.centre).squaredNorm() >= re * re) {
                             return; // bounding spheres apart: no contact, no history
                         }
-                        if (find_old(ContactGroup(0, k, 0, 0), 0) == nullptr &&
-                            polyhedra_apart_along(A, B, sep_dirs_[k])) {
-                            ++np_.calls; // the counts of element_contact's answer
-                            ++separation_skips_;
-                            return;
+                        if (find_old(ContactGroup(0, k, 0, 0), 0) == nullptr) {
+                            // The proof of an earlier step, moved to this pose: a vertex's height
+                            // along the direction m changes by at most the body's rotation
+                            // since (|R - R0| <= 2 min |q -+ q0|) times its farthest vertex, so
+                            // overlap <= overlap0 + m.(x_b - x_a) - along0 + r_a |dR_a| +
+                            // r_b |dR_b|. Below minus the margin the pair is apart (the bound's
+                            // round-off is ~1e-14 of the sizes against a margin of 1e-10), as the
+                            // vertex scan would prove; above it the scan runs and renews it.
+                            const Vec3& m = sep_dirs_[k];
+                            SeparationProof& proof = sep_proofs_[k];
+                            const double along = m.dot(p_.x[b] - p_.x[a]);
+                            const double margin = polyhedra_separation_margin(A, B);
+                            if (proof.valid) {
+                                const auto turn = [](const Quat& q, const Quat& q0) {
+                                    const double minus = (q.coeffs() - q0.coeffs()).norm();
+                                    const double plus = (q.coeffs() + q0.coeffs()).norm();
+                                    return 2.0 * std::min(minus, plus) * (1.0 + 1e-9);
+                                };
+                                const double bound = proof.overlap + (along - proof.along) +
+                                                     A.poly->radius * turn(A.q, proof.qa) +
+                                                     B.poly->radius * turn(B.q, proof.qb);
+                                if (bound < -margin) {
+                                    ++np_.calls; // the counts of element_contact's answer
+                                    ++separation_skips_;
+                                    return;
+                                }
+                            }
+                            double overlap = 0.0;
+                            if (polyhedra_apart_along(A, B, m, overlap)) {
+                                proof = {true, overlap, along, A.q, B.q};
+                                ++np_.calls;
+                                ++separation_skips_;
+                                return;
+                            }
                         }
                     }
+                }
+                if (k < sep_proofs_.size()) {
+                    sep_proofs_[k].valid = false; // the full route may change the direction
                 }
                 // Elements of b that reach into a's bounding sphere (a clump pair touches with a
                 // few of its members: 12 x 12 candidate pairs become about 2 x 2).
@@ -917,6 +952,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     }
                     if (m.k < sep_dirs_.size()) {
                         __builtin_prefetch(&sep_dirs_[m.k]);
+                        const char* q = reinterpret_cast<const char*>(&sep_proofs_[m.k]);
+                        __builtin_prefetch(q);
+                        __builtin_prefetch(q + sizeof(SeparationProof) - 1);
                     }
                     return;
                 }
