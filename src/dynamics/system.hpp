@@ -347,7 +347,8 @@ class System {
     // of that proof (overlap along the direction, the direction's component of the centres'
     // difference, both orientations), from which a later step bounds the overlap without the
     // vertex scan (body_forces, general_entry). Valid only until the entry's direction changes:
-    // cleared whenever the entry takes the full route. The answers do not depend on it.
+    // cleared whenever the entry takes the full route (a list build zeroes the directions, which
+    // only the full route sets again, so no reset is needed). The answers do not depend on it.
     struct SeparationProof {
         bool valid = false;
         double overlap = 0.0; // overlap along the direction at the proof (m, < 0)
