@@ -79,5 +79,7 @@ int main(int argc, char** argv) {
     const auto& memo = kiln::geometry::plane_memo_counters();
     std::fprintf(stderr, "plane memo: %ld queries tried it, %ld answered, %ld refills\n",
                  memo.tried, memo.answered, memo.refills);
+    std::fprintf(stderr, "element pairs queried %ld, proved apart by a cached direction %ld\n",
+                 sys.narrow_phase_counters().calls, sys.separation_skips());
     return 0;
 }

@@ -362,9 +362,7 @@ ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase m
     // again, so it goes straight to the exact query, which finds a pair apart too.
     // The cached direction's gap from heights alone (polyhedron_overlap_along): equal to the
     // support points' form to round-off, far below the margin, so the same pairs are proved apart.
-    if (sep != nullptr && sep->squaredNorm() > 0.0 &&
-        geometry::polyhedron_overlap_along(pa, pb, *sep) <
-            -kSeparationMargin * (a.radius + b.radius)) {
+    if (sep != nullptr && sep->squaredNorm() > 0.0 && polyhedra_apart_along(a, b, *sep)) {
         out.proved_apart = true;
         return out;
     }
@@ -409,12 +407,16 @@ ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase m
                 return false;
             }
             near_support(n->pa, -c.normal, c.depth, n->va);
-            near_support(n->pb, c.normal, c.depth, n->vb);
             n->known = true;
+            if (n->va.size() == 1) { // a vertex of a: pair_point reads neither b's list nor
+                n->vb.clear();       // the patch
+                return false;
+            }
+            near_support(n->pb, c.normal, c.depth, n->vb);
             return pair_point_needs_patch(n->va, n->vb);
         };
-        pc = memo != nullptr ? geometry::polyhedron_contact(pa, pb, need, *memo)
-                             : geometry::polyhedron_contact(pa, pb, need);
+        // Only the point is read here: the points and the patch polygon are not built.
+        pc = geometry::polyhedron_contact_point(pa, pb, need, memo);
         out.converged = pc.converged;
         if (pc.converged && !pc.touching && pc.depth < 0.0 && sep != nullptr) {
             *sep = pc.normal; // the common plane of the largest gap
@@ -592,6 +594,22 @@ ElementContact polyhedron_wall(const Element& a, const WallShape& w) {
 }
 
 } // namespace
+
+bool polyhedra_apart_along(const Element& a, const Element& b, const Vec3& sep) {
+    double overlap = 0.0;
+    return polyhedra_apart_along(a, b, sep, overlap);
+}
+
+bool polyhedra_apart_along(const Element& a, const Element& b, const Vec3& sep, double& overlap) {
+    const geometry::PosedPolyhedron pa{a.poly, a.centre, a.q};
+    const geometry::PosedPolyhedron pb{b.poly, b.centre, b.q};
+    overlap = geometry::polyhedron_overlap_along(pa, pb, sep);
+    return overlap < -kSeparationMargin * (a.radius + b.radius);
+}
+
+double polyhedra_separation_margin(const Element& a, const Element& b) {
+    return kSeparationMargin * (a.radius + b.radius);
+}
 
 double equivalent_radius(const geometry::ShapeTemplate& t) {
     return std::cbrt(3.0 * t.volume / (4.0 * std::numbers::pi));

@@ -129,6 +129,19 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
                                              bool touched_last = false,
                                              geometry::PlaneMemo* memo = nullptr);
 
+/// Is the pair of polyhedron elements a, b apart along `sep` (unit, from b to a, world frame) by
+/// more than the separation margin (1e-10 of the two bounding radii)? The test element_contact
+/// runs first on a polyhedron pair's cached separating direction, for a caller that runs it
+/// before assembling the query (the step loop, for a pair that was apart at its last query).
+[[nodiscard]] bool polyhedra_apart_along(const Element& a, const Element& b, const Vec3& sep);
+
+/// As polyhedra_apart_along, also returning the overlap along `sep` it compared (m).
+[[nodiscard]] bool polyhedra_apart_along(const Element& a, const Element& b, const Vec3& sep,
+                                         double& overlap);
+
+/// Margin of polyhedra_apart_along (m): the overlap along the direction must lie below minus this.
+[[nodiscard]] double polyhedra_separation_margin(const Element& a, const Element& b);
+
 /// Effective radius (m) of element a against a flat wall of unit normal n (from the wall to a,
 /// world frame): a sphere's radius, a polyhedron's equivalent radius, a superquadric's R* at its
 /// deepest point (as element_wall_contact on a plane).

@@ -343,6 +343,20 @@ class System {
     // memory from another pose is refilled); the answers do not depend on it.
     std::vector<geometry::PlaneMemo> plane_memos_;
     bool plane_memo_ = true;
+    // Per list entry of two single polyhedra whose cached direction proved them apart: the pose
+    // of that proof (overlap along the direction, the direction's component of the centres'
+    // difference, both orientations), from which a later step bounds the overlap without the
+    // vertex scan (body_forces, general_entry). Valid only until the entry's direction changes:
+    // cleared whenever the entry takes the full route (a list build zeroes the directions, which
+    // only the full route sets again, so no reset is needed). The answers do not depend on it.
+    struct SeparationProof {
+        bool valid = false;
+        double overlap = 0.0; // overlap along the direction at the proof (m, < 0)
+        double along = 0.0;   // direction . (x_b - x_a) at the proof (m)
+        Quat qa = Quat::Identity();
+        Quat qb = Quat::Identity();
+    };
+    std::vector<SeparationProof> sep_proofs_;
     bool convex_blocks_ = true; // see use_convex_blocks
     long separation_skips_ = 0;
     // Compact histories, parallel to member_pairs_ (docs/architecture.md, "Contact records"): the

@@ -695,6 +695,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             if (plane_memos_.size() < sep_dirs_.size()) {
                 plane_memos_.resize(sep_dirs_.size());
             }
+            if (sep_proofs_.size() < sep_dirs_.size()) {
+                sep_proofs_.resize(sep_dirs_.size());
+            }
             const auto general_entry = [&](std::uint32_t k, std::uint32_t a, std::uint32_t b) {
                 const double rsum = p_.radius[a] + p_.radius[b];
                 if ((p_.x[a] - p_.x[b]).squaredNorm() >= rsum * rsum) {
@@ -707,6 +710,69 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 // directions"); it only saves work, the answer is the same without it.
                 const bool single =
                     element_begin_[a + 1] - a0 == 1 && element_begin_[b + 1] - b0 == 1;
+                // Two single polyhedra with a cached direction (apart at their last query): the
+                // bounding-sphere tests of the loop below, in its order, then the cached
+                // direction's test as element_contact runs it, without copying the elements or
+                // assembling the query (most such entries are near misses proved apart here).
+                // Otherwise the loop below runs as before.
+                if (single && separation_cache_ && !(member_c_[a0].r > 0.0) &&
+                    !(member_c_[b0].r > 0.0) && sep_dirs_[k].squaredNorm() > 0.0) {
+                    const Element& A = elements_[a0];
+                    const Element& B = elements_[b0];
+                    if (A.kind == Element::Kind::polyhedron &&
+                        B.kind == Element::Kind::polyhedron) {
+                        const double rb = B.radius + p_.radius[a];
+                        if (!((B.centre - p_.x[a]).squaredNorm() < rb * rb)) {
+                            return;
+                        }
+                        const double rab = A.radius + p_.radius[b];
+                        if ((A.centre - p_.x[b]).squaredNorm() >= rab * rab) {
+                            return;
+                        }
+                        const double re = A.radius + B.radius;
+                        if ((A.centre - B.centre).squaredNorm() >= re * re) {
+                            return; // bounding spheres apart: no contact, no history
+                        }
+                        if (find_old(ContactGroup(0, k, 0, 0), 0) == nullptr) {
+                            // The proof of an earlier step, moved to this pose: a vertex's height
+                            // along the direction m changes by at most the body's rotation
+                            // since (|R - R0| <= 2 min |q -+ q0|) times its farthest vertex, so
+                            // overlap <= overlap0 + m.(x_b - x_a) - along0 + r_a |dR_a| +
+                            // r_b |dR_b|. Below minus the margin the pair is apart (the bound's
+                            // round-off is ~1e-14 of the sizes against a margin of 1e-10), as the
+                            // vertex scan would prove; above it the scan runs and renews it.
+                            const Vec3& m = sep_dirs_[k];
+                            SeparationProof& proof = sep_proofs_[k];
+                            const double along = m.dot(p_.x[b] - p_.x[a]);
+                            const double margin = polyhedra_separation_margin(A, B);
+                            if (proof.valid) {
+                                const auto turn = [](const Quat& q, const Quat& q0) {
+                                    const double minus = (q.coeffs() - q0.coeffs()).norm();
+                                    const double plus = (q.coeffs() + q0.coeffs()).norm();
+                                    return 2.0 * std::min(minus, plus) * (1.0 + 1e-9);
+                                };
+                                const double bound = proof.overlap + (along - proof.along) +
+                                                     A.poly->radius * turn(A.q, proof.qa) +
+                                                     B.poly->radius * turn(B.q, proof.qb);
+                                if (bound < -margin) {
+                                    ++np_.calls; // the counts of element_contact's answer
+                                    ++separation_skips_;
+                                    return;
+                                }
+                            }
+                            double overlap = 0.0;
+                            if (polyhedra_apart_along(A, B, m, overlap)) {
+                                proof = {true, overlap, along, A.q, B.q};
+                                ++np_.calls;
+                                ++separation_skips_;
+                                return;
+                            }
+                        }
+                    }
+                }
+                if (k < sep_proofs_.size()) {
+                    sep_proofs_[k].valid = false; // the full route may change the direction
+                }
                 // Elements of b that reach into a's bounding sphere (a clump pair touches with a
                 // few of its members: 12 x 12 candidate pairs become about 2 x 2).
                 near_b.clear();
@@ -825,29 +891,90 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             const bool from_table = members_from_table_;
             // First pass, without branches: the indices of the member pairs that touch (centres
             // closer than the sum of the radii, and distinct: coincident centres have no normal)
-            // and of the general items, in list order. About one member pair in four touches, so
-            // a branch per pair was mispredicted often.
+            // and of the general items whose bodies' bounding spheres may overlap, in list order.
+            // About one member pair in four touches, so a branch per pair was mispredicted often.
+            // A general item is a hit when the centres are closer than the sum of the bounding
+            // radii widened by 1e-9 of it: general_entry's own test (unchanged) decides, this one
+            // only drops the entries it would return from at once (most polyhedron entries), so a
+            // difference of round-off between the two expressions cannot drop a contact.
             const std::size_t n_members = member_pairs_.size();
             member_hits_.resize(n_members);
             std::size_t n_hits = 0;
             {
                 const MemberPair* mp = member_pairs_.data();
                 const MemberSphere* c = member_c_.data();
+                const Vec3* x = p_.x.data();
+                const double* rad = p_.radius.data();
                 std::uint32_t* hits = member_hits_.data();
                 for (std::size_t i = 0; i < n_members; ++i) {
                     const bool general = mp[i].ea == no_element;
-                    const MemberSphere& A = c[general ? 0U : mp[i].ea];
-                    const MemberSphere& B = c[general ? 0U : mp[i].eb];
-                    const double re = A.r + B.r;
-                    const double d0 = A.x - B.x;
-                    const double d1 = A.y - B.y;
-                    const double d2 = A.z - B.z;
-                    const double dd = d0 * d0 + d1 * d1 + d2 * d2;
+                    bool hit = false;
+                    if (general) { // the same kind for runs of items: predicted
+                        const Vec3& pa = x[mp[i].a];
+                        const Vec3& pb = x[mp[i].b];
+                        const double rs = (rad[mp[i].a] + rad[mp[i].b]) * (1.0 + 1e-9);
+                        const double d0 = pa.x() - pb.x();
+                        const double d1 = pa.y() - pb.y();
+                        const double d2 = pa.z() - pb.z();
+                        hit = d0 * d0 + d1 * d1 + d2 * d2 < rs * rs;
+                    } else {
+                        const MemberSphere& A = c[mp[i].ea];
+                        const MemberSphere& B = c[mp[i].eb];
+                        const double re = A.r + B.r;
+                        const double d0 = A.x - B.x;
+                        const double d1 = A.y - B.y;
+                        const double d2 = A.z - B.z;
+                        const double dd = d0 * d0 + d1 * d1 + d2 * d2;
+                        hit = (dd < re * re) & (dd != 0.0);
+                    }
                     hits[n_hits] = static_cast<std::uint32_t>(i);
-                    n_hits += static_cast<std::size_t>(general | ((dd < re * re) & (dd != 0.0)));
+                    n_hits += static_cast<std::size_t>(hit);
                 }
             }
+            // The memories of the general items a few hits ahead are fetched into the cache
+            // (each entry's memory and its block of values lie apart in memory; their loads were
+            // the hottest lines of the memory's route): the structs `ahead` hits ahead, the
+            // blocks (their addresses read from the structs fetched) half as far.
+            constexpr std::size_t ahead = 8;
+            const auto fetch_memo = [&](std::size_t h, bool values) {
+                if (h >= n_hits) {
+                    return;
+                }
+                const MemberPair& m = member_pairs_[member_hits_[h]];
+                if (m.ea != no_element || m.k >= plane_memos_.size()) {
+                    return;
+                }
+                const geometry::PlaneMemo& pm = plane_memos_[m.k];
+                if (!values) {
+                    const char* p = reinterpret_cast<const char*>(&pm);
+                    for (std::size_t off = 0; off < sizeof(geometry::PlaneMemo); off += 64) {
+                        __builtin_prefetch(p + off);
+                    }
+                    if (m.k < sep_dirs_.size()) {
+                        __builtin_prefetch(&sep_dirs_[m.k]);
+                        const char* q = reinterpret_cast<const char*>(&sep_proofs_[m.k]);
+                        __builtin_prefetch(q);
+                        __builtin_prefetch(q + sizeof(SeparationProof) - 1);
+                    }
+                    return;
+                }
+                if (pm.valid) {
+                    const char* p = reinterpret_cast<const char*>(pm.values.data());
+                    const std::size_t bytes = pm.values.size() * sizeof(double);
+                    for (std::size_t off = 0; off < bytes; off += 64) {
+                        __builtin_prefetch(p + off);
+                    }
+                }
+            };
+            for (std::size_t h = 0; h < std::min(ahead, n_hits); ++h) {
+                fetch_memo(h, false);
+            }
+            for (std::size_t h = 0; h < std::min(ahead / 2, n_hits); ++h) {
+                fetch_memo(h, true);
+            }
             for (std::size_t h = 0; h < n_hits; ++h) {
+                fetch_memo(h + ahead, false);
+                fetch_memo(h + ahead / 2, true);
                 const MemberPair& m = member_pairs_[member_hits_[h]];
                 if (m.ea == no_element) {
                     general_entry(m.k, m.a, m.b);

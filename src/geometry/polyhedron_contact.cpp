@@ -1,9 +1,12 @@
-// Fast common plane between convex polyhedra, contact points and patch (see the header).
+// Fast common plane between convex polyhedra, contact points and patch (see the header). The
+// memory of a pair's last search is in polyhedron_memo.cpp, the parts both use in
+// polyhedron_search.hpp.
 
 #include "geometry/polyhedron_contact.hpp"
 
 #include "core/error.hpp"
 #include "geometry/convex_polygon.hpp"
+#include "geometry/polyhedron_search.hpp"
 #include "geometry/separating_axis.hpp"
 
 #include <algorithm>
@@ -118,42 +121,7 @@ PolyhedronFeatures polyhedron_features(const ConvexPolyhedron& p) {
     return f;
 }
 
-namespace {
-
-using detail::clip_convex;
-using detail::clip_edge;
-using detail::hull_2d;
-using detail::section;
-using detail::Vec2;
-
-/// Storage of PlaneDistances, kept between queries (per thread) to reuse its memory.
-struct DistanceTable {
-    std::vector<double> dist;            // vertex-major distances (m)
-    std::vector<unsigned char> row_done; // per vertex: its row is filled
-    std::vector<unsigned char> col_done; // per face: its column is filled
-    std::vector<std::uint64_t> beyond;   // per vertex with a row: bit k set when dist > reach
-    std::vector<std::size_t> cols;       // the filled columns, in the order filled
-};
-
-/// B expressed in A's body frame: vertices and face planes.
-struct Relative {
-    Mat3 rot;               // B body -> A body
-    Vec3 shift;             // B's centre in A's frame (m)
-    std::vector<Vec3> vb;   // B's vertices in A's frame (m)
-    std::vector<Vec3> nb;   // B's face normals in A's frame
-    std::vector<double> ob; // B's face offsets in A's frame (m)
-    // Per feature edge of B, in A's frame: the negated normals c, d of its two faces and d x c,
-    // the Gauss-map arc of the edge of -B.
-    std::vector<std::array<Vec3, 3>> arcs;
-    // Signed distances of the vertices of one body beyond the face planes of the other,
-    // vertex-major: dist_b[j * nfa + k] = n_a,k . vb_j - o_a,k and dist_a[i * nfb + k] =
-    // n_b,k . va_i - o_b,k (m), filled by columns (a face's separation) and rows (a vertex's
-    // distances, for the prune and the certificates) where they are first read.
-    DistanceTable dist_b, dist_a;
-    std::vector<int> edges_a, edges_b; // feature edges kept for the edge-edge stage
-    bool pruned = false;               // edges_a/edges_b are valid for this pose
-    bool full_tables = false;          // dist_b and dist_a hold every distance (full search)
-};
+namespace search {
 
 /// B's pose and vertices in A's frame (enough for A's face stage, which rejects most near misses).
 void make_relative(const PosedPolyhedron& a, const PosedPolyhedron& b, Relative& r) {
@@ -189,6 +157,25 @@ void relative_arcs(const PolyhedronFeatures& fb, Relative& r) {
     }
 }
 
+/// Squared distance (m^2) from the segment p0-p1 to the point c.
+double segment_point_distance2(const Vec3& p0, const Vec3& p1, const Vec3& c) {
+    const Vec3 d = p1 - p0;
+    const double dd = d.squaredNorm();
+    const double t = dd > 0.0 ? std::clamp((c - p0).dot(d) / dd, 0.0, 1.0) : 0.0;
+    return (p0 + t * d - c).squaredNorm();
+}
+
+} // namespace search
+
+namespace {
+
+using namespace search;
+using detail::clip_convex;
+using detail::clip_edge;
+using detail::hull_2d;
+using detail::section;
+using detail::Vec2;
+
 /// Gauss-map test of Gregorius (2013): do the arcs (a, b) of A's edge and (c, d) of B's negated
 /// edge cross, i.e. does the edge pair span a face of the Minkowski difference?
 bool is_minkowski_face(const Vec3& a, const Vec3& b, const Vec3& bxa, const Vec3& c, const Vec3& d,
@@ -199,154 +186,6 @@ bool is_minkowski_face(const Vec3& a, const Vec3& b, const Vec3& bxa, const Vec3
     const double bdc = b.dot(dxc);
     return cba * dba < 0.0 && adc * bdc < 0.0 && cba * bdc > 0.0;
 }
-
-/// Squared distance (m^2) from the segment p0-p1 to the point c.
-double segment_point_distance2(const Vec3& p0, const Vec3& p1, const Vec3& c) {
-    const Vec3 d = p1 - p0;
-    const double dd = d.squaredNorm();
-    const double t = dd > 0.0 ? std::clamp((c - p0).dot(d) / dd, 0.0, 1.0) : 0.0;
-    return (p0 + t * d - c).squaredNorm();
-}
-
-/// Signed distances (m) of the vertices `v` of one body beyond the face planes (n, o) of the
-/// other, vertex-major (entry i * nf + k = n_k . v_i - o_k), filled by whole columns (one face
-/// against every vertex: its separation) or whole rows (one vertex against every face: the prune
-/// and the certificates) where first read. An entry may be computed in both; it is the one
-/// expression `n_k . v_i - o_k` either way, so the numbers do not depend on which are read.
-class PlaneDistances {
-  public:
-    PlaneDistances(const std::vector<Vec3>& n, const std::vector<double>& o,
-                   const std::vector<Vec3>& v, DistanceTable& t)
-        : n_(n), o_(o), v_(v), t_(t), nf_(n.size()) {
-        t_.dist.resize(nf_ * v.size());
-        t_.row_done.assign(v.size(), 0);
-        t_.col_done.assign(nf_, 0);
-        t_.beyond.resize(v.size());
-        t_.cols.clear();
-    }
-    /// Separation (m) along face k: the smallest distance of the vertices beyond its plane.
-    double separation(std::size_t k) {
-        const Vec3 n = n_[k];
-        const double o = o_[k];
-        const Vec3* v = v_.data();
-        const std::size_t nv = v_.size();
-        const std::size_t nf = nf_;
-        double* col = t_.dist.data() + k;
-        double s = std::numeric_limits<double>::infinity();
-        for (std::size_t i = 0; i < nv; ++i) {
-            const double d = n.dot(v[i]) - o;
-            col[i * nf] = d;
-            s = std::min(s, d);
-        }
-        if (t_.col_done[k] == 0) {
-            t_.col_done[k] = 1;
-            t_.cols.push_back(k);
-        }
-        return s;
-    }
-    /// The prune's distance (m): the masks of the rows mark the planes a vertex lies beyond by
-    /// more than `reach`. Set before the first row.
-    void set_reach(double reach) { reach_ = reach; }
-    /// Do both vertices i0 and i1 lie beyond one face plane by more than the reach? Reads the
-    /// filled columns first, then the two rows.
-    bool both_beyond(std::size_t i0, std::size_t i1) {
-        const double reach = reach_;
-        for (const std::size_t k : t_.cols) {
-            if (t_.dist[i0 * nf_ + k] > reach && t_.dist[i1 * nf_ + k] > reach) {
-                return true;
-            }
-        }
-        if (t_.row_done[i1] != 0 && t_.row_done[i0] == 0) {
-            std::swap(i0, i1); // start from a row already filled
-        }
-        fill_row(i0);
-        if (nf_ <= 64) {
-            if (t_.row_done[i1] != 0) {
-                return (t_.beyond[i0] & t_.beyond[i1]) != 0;
-            }
-            // The other end only against the planes the first lies beyond (often none: an
-            // end inside the other body keeps the edge without the second row).
-            const Vec3 x = v_[i1];
-            for (std::uint64_t m = t_.beyond[i0]; m != 0; m &= m - 1) {
-                const auto k = static_cast<std::size_t>(std::countr_zero(m));
-                if (n_[k].dot(x) - o_[k] > reach) {
-                    return true;
-                }
-            }
-            return false;
-        }
-        fill_row(i1);
-        const double* d0 = t_.dist.data() + i0 * nf_;
-        const double* d1 = t_.dist.data() + i1 * nf_;
-        for (std::size_t k = 0; k < nf_; ++k) {
-            if (d0[k] > reach && d1[k] > reach) {
-                return true;
-            }
-        }
-        return false;
-    }
-    /// Does a vertex lie strictly inside the other body (all its distances negative)? A filled
-    /// column with a distance >= 0 answers no for that vertex without its row; a vertex without
-    /// a row stops at its first distance >= 0.
-    bool any_inside() {
-        for (std::size_t i = 0; i < v_.size(); ++i) {
-            bool out = false;
-            for (const std::size_t k : t_.cols) {
-                out = out || t_.dist[i * nf_ + k] >= 0.0;
-            }
-            if (out) {
-                continue;
-            }
-            std::size_t k = 0;
-            if (t_.row_done[i] != 0) {
-                const double* d = t_.dist.data() + i * nf_;
-                while (k < nf_ && !(d[k] >= 0.0)) {
-                    ++k;
-                }
-            } else {
-                const Vec3 x = v_[i];
-                while (k < nf_ && !(n_[k].dot(x) - o_[k] >= 0.0)) {
-                    ++k;
-                }
-            }
-            if (k == nf_) {
-                return true;
-            }
-        }
-        return false;
-    }
-    [[nodiscard]] const std::vector<Vec3>& vertices() const { return v_; }
-    [[nodiscard]] std::size_t faces() const { return nf_; }
-
-  private:
-    void fill_row(std::size_t i) {
-        if (t_.row_done[i] != 0) {
-            return;
-        }
-        t_.row_done[i] = 1;
-        // Locals, so that the stores into the row (doubles) cannot alias them for the compiler.
-        const Vec3* n = n_.data();
-        const double* o = o_.data();
-        const Vec3 x = v_[i];
-        const double reach = reach_;
-        const std::size_t nf = nf_;
-        double* row = t_.dist.data() + i * nf;
-        std::uint64_t mask = 0;
-        for (std::size_t k = 0; k < nf; ++k) {
-            const double d = n[k].dot(x) - o[k];
-            row[k] = d;
-            mask |= static_cast<std::uint64_t>(d > reach) << (k & 63U);
-        }
-        t_.beyond[i] = mask;
-    }
-
-    const std::vector<Vec3>& n_;
-    const std::vector<double>& o_;
-    const std::vector<Vec3>& v_;
-    DistanceTable& t_;
-    std::size_t nf_;
-    double reach_ = std::numeric_limits<double>::infinity();
-};
 
 /// Edges of a body (vertices and distances beyond the other body's face planes in `t`, its
 /// reach set) that pass within the reach of the other body, to the test's precision: dropped are
@@ -471,9 +310,10 @@ PlaneDepth plane_depth(const PolyhedronFeatures& fa, const Relative& r, const Ve
 }
 
 /// Points and patch for the normal m (unit, from B to A), all in A's body frame; the result's
-/// vectors are converted to the world frame of A at the end.
+/// vectors are converted to the world frame of A at the end. `point_only`: the points and the
+/// patch polygon are left empty (depth, normal, point and patch_area the same numbers).
 PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b, const Relative& r,
-                             const Vec3& m) {
+                             const Vec3& m, bool point_only = false) {
     const PolyhedronFeatures& fa = *a.shape;
     const PolyhedronFeatures& fb = *b.shape;
     const double scale = fa.radius + fb.radius;
@@ -550,6 +390,9 @@ PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b,
     }
     c.normal = a.q * m;
     c.point = a.x + a.q * point_a;
+    if (point_only) {
+        return c;
+    }
     c.points.reserve(pts.size());
     for (const Vec3& p : pts) {
         c.points.emplace_back(a.x + a.q * p);
@@ -563,12 +406,21 @@ PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b,
     return c;
 }
 
+} // namespace
+
+namespace search {
+
 /// The edge-edge stage over the kept edges r.edges_a x r.edges_b (arcs set): raises best (the
 /// largest separation, m) and sets best_m (A's frame, from B to A) and c.feature when an edge pair
 /// spanning a face of the Minkowski difference gives a larger one; `second` (m) is raised to the
 /// largest of the other values met (the runner-up, for the memory's tie test).
 void edge_stage(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const Relative& r,
-                double& best, Vec3& best_m, PolyhedronContact& c, double& second) {
+                double& best_out, Vec3& best_m, PolyhedronContact& c, double& second_out) {
+    double best = best_out;
+    double second = second_out;
+    int iterations = c.iterations;
+    bool raised = false;
+    Vec3 winner_m = best_m;
     for (const int ia : r.edges_a) {
         const auto& ea = fa.edges[static_cast<std::size_t>(ia)];
         const Vec3& na0 = fa.face_normals[static_cast<std::size_t>(ea[2])];
@@ -583,7 +435,7 @@ void edge_stage(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, cons
                 continue;
             }
             const auto& eb = fb.edges[k];
-            ++c.iterations;
+            ++iterations;
             const Vec3& pb = r.vb[static_cast<std::size_t>(eb[0])];
             const Vec3 db = r.vb[static_cast<std::size_t>(eb[1])] - pb;
             Vec3 n = da.cross(db);
@@ -599,13 +451,20 @@ void edge_stage(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, cons
             if (sep > best) {
                 second = best;
                 best = sep;
-                best_m = -n;
-                c.feature = CommonPlaneFeature::kEdgeEdge;
+                winner_m = -n;
+                raised = true;
             } else {
                 second = std::max(second, sep);
             }
         }
     }
+    if (raised) {
+        best_m = winner_m;
+        c.feature = CommonPlaneFeature::kEdgeEdge;
+    }
+    best_out = best;
+    second_out = second;
+    c.iterations = iterations;
 }
 
 /// Separations (m) along the face planes of `t`'s other body that can be the largest, as the
@@ -694,259 +553,7 @@ int edge_crosses(const std::vector<std::array<int, 4>>& edges, const std::vector
     return -1;
 }
 
-/// Tolerance of the memory's bounds and tests, relative to the sum of the bounding radii (-):
-/// far above the round-off of the distances (1e-16 relative) and of the stored values, far below
-/// any overlap the law acts on. Bounds are widened by it, ties within it and overlaps or
-/// certificates thinner than it go to the full search.
-constexpr double kMemoTolerance = 1e-9;
-
-/// Relative motion (relative to the sum of the bounding radii) beyond which the memory is not
-/// read and the full search refills it: the bounds widen with the motion, so a memory far from
-/// the pose rules out little. A choice of speed only; the answer does not depend on it.
-constexpr double kMemoDrift = 0.01;
-
-thread_local PlaneMemoCounters memo_counters;
-
-/// Refills the memory at the pose of r (make_relative and relative_faces done) from complete
-/// tables of distances, for a touching answer `best` (m, < 0), with the vertex deepest inside the
-/// other body as the certificate to try first (none: -1).
-void refill_memo(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const Relative& r,
-                 double best, PlaneMemo& memo) {
-    ++memo_counters.refills;
-    // The full search's tables where it filled them all (the values are bounds: any exact
-    // evaluation serves), else tables of their own.
-    thread_local std::vector<double> own_b; // B's vertices beyond A's planes
-    thread_local std::vector<double> own_a; // A's vertices beyond B's planes
-    thread_local std::vector<double> sep;
-    const std::size_t nfa = fa.face_normals.size();
-    const std::size_t nfb = fb.face_normals.size();
-    memo.values.resize(nfa + nfb + fa.edges.size() + fb.edges.size());
-    if (!r.full_tables) {
-        face_distances(fa.face_normals, fa.face_offsets, r.vb, own_b, sep);
-        face_distances(r.nb, r.ob, fa.vertices, own_a, sep);
-    }
-    const std::vector<double>& dist_b = r.full_tables ? r.dist_b.dist : own_b;
-    const std::vector<double>& dist_a = r.full_tables ? r.dist_a.dist : own_a;
-    // Separation along each face: the smallest distance in its column.
-    const auto columns = [](const std::vector<double>& dist, std::size_t nf, double* out) {
-        std::fill(out, out + nf, std::numeric_limits<double>::infinity());
-        for (std::size_t i = 0; i < dist.size(); ++i) {
-            out[i % nf] = std::min(out[i % nf], dist[i]);
-        }
-    };
-    columns(dist_b, nfa, memo.values.data());
-    columns(dist_a, nfb, memo.values.data() + nfa);
-    // Per edge, the larger of the prune's two distances: beyond one face plane of the other body
-    // (the larger over the planes of the nearer end's distance), and beyond its bounding sphere.
-    const auto edge_reach = [](const std::vector<std::array<int, 4>>& edges,
-                               const std::vector<Vec3>& v, const std::vector<double>& dist,
-                               std::size_t nf, const Vec3& centre, double radius, double* out) {
-        for (std::size_t e = 0; e < edges.size(); ++e) {
-            const auto i0 = static_cast<std::size_t>(edges[e][0]);
-            const auto i1 = static_cast<std::size_t>(edges[e][1]);
-            const double* d0 = dist.data() + i0 * nf;
-            const double* d1 = dist.data() + i1 * nf;
-            double m = std::sqrt(segment_point_distance2(v[i0], v[i1], centre)) - radius;
-            for (std::size_t k = 0; k < nf; ++k) {
-                m = std::max(m, std::min(d0[k], d1[k]));
-            }
-            out[e] = m;
-        }
-    };
-    double* stored_edges = memo.values.data() + nfa + nfb;
-    edge_reach(fa.edges, fa.vertices, dist_a, nfb, r.shift, fb.radius, stored_edges);
-    edge_reach(fb.edges, r.vb, dist_b, nfa, Vec3::Zero(), fa.radius,
-               stored_edges + fa.edges.size());
-    // The vertex deepest inside the other body (smallest largest distance), B's first.
-    const double tol = kMemoTolerance * (fa.radius + fb.radius);
-    double deepest = -tol;
-    memo.inside = -1;
-    memo.cross = -1;
-    const auto scan = [&](const std::vector<double>& dist, std::size_t nf, std::size_t nv,
-                          int base) {
-        for (std::size_t i = 0; i < nv; ++i) {
-            const double* d = dist.data() + i * nf;
-            const double top = *std::max_element(d, d + nf);
-            if (top < deepest) {
-                deepest = top;
-                memo.inside = base + static_cast<int>(i);
-            }
-        }
-    };
-    scan(dist_b, nfa, r.vb.size(), 0);
-    scan(dist_a, nfb, fa.vertices.size(), static_cast<int>(r.vb.size()));
-    memo.valid = true;
-    memo.fa = &fa;
-    memo.fb = &fb;
-    memo.rot = r.rot;
-    memo.shift = r.shift;
-    memo.shift_in_b = r.rot.transpose() * r.shift;
-    memo.answer = best;
-}
-
-/// Is the memory's certificate vertex still inside the other body by more than tol (m)? (B's
-/// planes in r: relative_faces done; -1: no vertex.)
-bool memo_inside(const PolyhedronFeatures& fa, const Relative& r, int vertex, double tol) {
-    const auto nvb = static_cast<int>(r.vb.size());
-    if (vertex < 0) {
-        return false;
-    }
-    if (vertex < nvb) {
-        const Vec3 x = r.vb[static_cast<std::size_t>(vertex)];
-        for (std::size_t k = 0; k < fa.face_normals.size(); ++k) {
-            if (!(fa.face_normals[k].dot(x) - fa.face_offsets[k] < -tol)) {
-                return false;
-            }
-        }
-        return true;
-    }
-    const Vec3 x = fa.vertices[static_cast<std::size_t>(vertex - nvb)];
-    for (std::size_t k = 0; k < r.nb.size(); ++k) {
-        if (!(r.nb[k].dot(x) - r.ob[k] < -tol)) {
-            return false;
-        }
-    }
-    return true;
-}
-
-/// Does an edge cross the other body (the full search's second certificate)? The edge that did
-/// at the last query first, then the kept ones in r (A's, then B's); the one found is kept in
-/// memo.cross (A's edge e as e, B's as the count of A's edges + e).
-bool memo_crossing(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const Relative& r,
-                   PlaneMemo& memo) {
-    thread_local std::vector<int> one(1);
-    const auto nea = static_cast<int>(fa.edges.size());
-    if (memo.cross >= 0) {
-        one[0] = memo.cross < nea ? memo.cross : memo.cross - nea;
-        if (memo.cross < nea
-                ? edge_crosses(fa.edges, one, fa.vertices, r.nb, r.ob) >= 0
-                : edge_crosses(fb.edges, one, r.vb, fa.face_normals, fa.face_offsets) >= 0) {
-            return true;
-        }
-    }
-    int e = edge_crosses(fa.edges, r.edges_a, fa.vertices, r.nb, r.ob);
-    if (e < 0) {
-        e = edge_crosses(fb.edges, r.edges_b, r.vb, fa.face_normals, fa.face_offsets);
-        e = e < 0 ? -1 : nea + e;
-    }
-    memo.cross = e;
-    return e >= 0;
-}
-
-/// The common plane from the memory (see PlaneMemo), after make_relative: true with best, best_m
-/// (A's frame), c.feature and the prune's lists in r set as the full search sets them, when the
-/// bounds single out the answer; false (c and r to be reset) when the full search must run.
-///
-/// Why it is the full search's answer: a vertex of one body moves relative to the other by at
-/// most drift = |dR| r + |ds| (the change of the relative rotation in the Frobenius norm, which
-/// bounds the spectral one, times the bounding radius, plus the change of the centre's position),
-/// so every separation along a face and every distance beyond a plane moves by at most the drift,
-/// and the largest separation of all (the answer) too. A face whose stored separation plus the
-/// drift lies below a lower bound of the answer cannot win nor tie and is not evaluated; an edge
-/// whose stored distance beyond one plane minus the drift exceeds the prune's reach is one the full
-/// prune drops as well (the reach here is at least the full search's: its best face is at most
-/// the full search's). So the candidates evaluated include all the full search evaluates that can
-/// come near the answer, by the same expressions; the answer is kept only when it beats every
-/// other value met by the tolerance and a vertex lies inside the other body (then the full search
-/// has its certificate of overlap and takes no other path).
-bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Relative& r,
-                 PlaneMemo& memo, double& best, Vec3& best_m, PolyhedronContact& c) {
-    if (!memo.valid || memo.fa != &fa || memo.fb != &fb) {
-        return false;
-    }
-    ++memo_counters.tried;
-    const double scale = fa.radius + fb.radius;
-    const double tol = kMemoTolerance * scale;
-    const double turn = (r.rot - memo.rot).norm();
-    const double drift_b = turn * fb.radius + (r.shift - memo.shift).norm();
-    const double drift_a =
-        turn * fa.radius + (r.rot.transpose() * r.shift - memo.shift_in_b).norm();
-    if (!(std::max(drift_a, drift_b) <= kMemoDrift * scale)) {
-        return false;
-    }
-    const double floor = memo.answer - std::min(drift_a, drift_b) - tol; // <= the answer
-    thread_local std::vector<double> sep;
-    thread_local std::vector<double> bound;
-    double second = -std::numeric_limits<double>::infinity();
-    const std::size_t nfa = fa.face_normals.size();
-    const std::size_t nfb = fb.face_normals.size();
-    // Faces of A: a face is evaluated unless its bound (stored value, drift, round-off of the
-    // stored value, and the tie margin) lies below the running lower bound of the answer.
-    PlaneDistances tb(fa.face_normals, fa.face_offsets, r.vb, r.dist_b);
-    bound.resize(nfa);
-    for (std::size_t k = 0; k < nfa; ++k) {
-        bound[k] = memo.values[k] + drift_b + 2.0 * tol;
-    }
-    face_separations(tb, bound, floor, sep);
-    for (std::size_t k = 0; k < nfa; ++k) {
-        ++c.iterations;
-        if (sep[k] > best) {
-            second = best;
-            best = sep[k];
-            best_m = -fa.face_normals[k];
-            c.feature = CommonPlaneFeature::kFaceOfA;
-        } else {
-            second = std::max(second, sep[k]);
-        }
-    }
-    if (!(best < -tol)) {
-        return false;
-    }
-    relative_faces(fb, r);
-    PlaneDistances ta(r.nb, r.ob, fa.vertices, r.dist_a);
-    bound.resize(nfb);
-    for (std::size_t k = 0; k < nfb; ++k) {
-        bound[k] = memo.values[nfa + k] + drift_a + 2.0 * tol;
-    }
-    face_separations(ta, bound, std::max(floor, best), sep);
-    for (std::size_t k = 0; k < nfb; ++k) {
-        ++c.iterations;
-        if (sep[k] > best) {
-            second = best;
-            best = sep[k];
-            best_m = r.nb[k];
-            c.feature = CommonPlaneFeature::kFaceOfB;
-        } else {
-            second = std::max(second, sep[k]);
-        }
-    }
-    if (!(best < -tol)) {
-        return false;
-    }
-    // The prune from the stored distances (the full search's reach expression).
-    const double reach = -best + 1e-9 * (fa.radius + fb.radius);
-    // An edge is dropped when its stored distance, less the drift and the tolerance, exceeds the
-    // reach; written without a branch (most edges are dropped, the rest in no pattern).
-    const auto keep = [](const double* stored, std::size_t n, double bar, std::vector<int>& kept) {
-        kept.resize(n);
-        int* out = kept.data();
-        std::size_t m = 0;
-        for (std::size_t e = 0; e < n; ++e) {
-            out[m] = static_cast<int>(e);
-            m += stored[e] > bar ? 0U : 1U;
-        }
-        kept.resize(m);
-    };
-    const double* stored_edges = memo.values.data() + nfa + nfb;
-    keep(stored_edges, fa.edges.size(), reach + drift_a + tol, r.edges_a);
-    keep(stored_edges + fa.edges.size(), fb.edges.size(), reach + drift_b + tol, r.edges_b);
-    r.pruned = true;
-    relative_arcs(fb, r);
-    edge_stage(fa, fb, r, best, best_m, c, second);
-    if (!(best < -tol) || !(second < best - tol)) {
-        return false;
-    }
-    // The certificate of overlap: the stored vertex, else a kept edge crossing the other body
-    // (edge_crosses as the full search calls it: a crossing edge passes within the reach of the
-    // other body, so the full prune keeps it too, and the same expression gives the same answer).
-    if (!memo_inside(fa, r, memo.inside, tol) && !memo_crossing(fa, fb, r, memo)) {
-        return false;
-    }
-    ++memo_counters.answered;
-    return true;
-}
-
-} // namespace
+} // namespace search
 
 namespace {
 
@@ -1093,9 +700,10 @@ bool full_search(const PosedPolyhedron& a, const PosedPolyhedron& b, detail::Fac
 
 /// The fast common plane; the patch as `with_patch` says, or (with `need_patch`) as it decides.
 /// `scan`: which face stages (see detail::FaceScan).
+/// `point_only`: points and patch polygon left empty (see patch_in_a).
 PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& b, bool with_patch,
                                const PatchTest* need_patch, detail::FaceScan scan,
-                               PlaneMemo* memo = nullptr) {
+                               PlaneMemo* memo = nullptr, bool point_only = false) {
     PolyhedronContact c;
     const PolyhedronFeatures& fa = *a.shape;
     const PolyhedronFeatures& fb = *b.shape;
@@ -1159,7 +767,7 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
             return c;
         }
     }
-    PolyhedronContact p = patch_in_a(a, b, r, best_m);
+    PolyhedronContact p = patch_in_a(a, b, r, best_m, point_only);
     p.feature = c.feature;
     p.iterations = c.iterations;
     return p;
@@ -1168,17 +776,31 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
 } // namespace
 
 double polyhedron_overlap_along(const PosedPolyhedron& a, const PosedPolyhedron& b, const Vec3& m) {
+    // The largest height of a body's vertices along d, in four running maxima (the largest of a
+    // set does not depend on the order it is taken in): a chain of dependent maxima, one per
+    // vertex, was the loop's critical path (`cylinder_16`: 32 vertices per body).
+    const auto top = [](const std::vector<Vec3>& vs, const Vec3& d) {
+        constexpr double lowest = -std::numeric_limits<double>::infinity();
+        double h0 = lowest;
+        double h1 = lowest;
+        double h2 = lowest;
+        double h3 = lowest;
+        const std::size_t n = vs.size();
+        std::size_t i = 0;
+        for (; i + 4 <= n; i += 4) {
+            h0 = std::max(h0, d.dot(vs[i]));
+            h1 = std::max(h1, d.dot(vs[i + 1]));
+            h2 = std::max(h2, d.dot(vs[i + 2]));
+            h3 = std::max(h3, d.dot(vs[i + 3]));
+        }
+        for (; i < n; ++i) {
+            h0 = std::max(h0, d.dot(vs[i]));
+        }
+        return std::max(std::max(h0, h1), std::max(h2, h3));
+    };
     const Vec3 mb = b.q.conjugate() * m;
     const Vec3 ma = a.q.conjugate() * m;
-    double hb = -std::numeric_limits<double>::infinity();
-    for (const Vec3& v : b.shape->vertices) {
-        hb = std::max(hb, mb.dot(v));
-    }
-    double ha = -std::numeric_limits<double>::infinity();
-    for (const Vec3& v : a.shape->vertices) {
-        ha = std::max(ha, -ma.dot(v));
-    }
-    return m.dot(b.x - a.x) + hb + ha;
+    return m.dot(b.x - a.x) + top(b.shape->vertices, mb) + top(a.shape->vertices, -ma);
 }
 
 PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b,
@@ -1196,8 +818,9 @@ PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhe
     return common_plane(a, b, true, &need_patch, detail::FaceScan::automatic, &memo);
 }
 
-PlaneMemoCounters& plane_memo_counters() {
-    return memo_counters;
+PolyhedronContact polyhedron_contact_point(const PosedPolyhedron& a, const PosedPolyhedron& b,
+                                           const PatchTest& need_patch, PlaneMemo* memo) {
+    return common_plane(a, b, true, &need_patch, detail::FaceScan::automatic, memo, true);
 }
 
 namespace detail {

@@ -165,6 +165,14 @@ struct PlaneMemo {
                                                    const PosedPolyhedron& b,
                                                    const PatchTest& need_patch, PlaneMemo& memo);
 
+/// As polyhedron_contact with `need_patch` and the memory (nullptr: none), for a caller that reads
+/// only touching, converged, depth, normal, point, patch_area and feature: those are the same
+/// numbers, while `points` and `patch` are left empty (not turned to the world frame).
+[[nodiscard]] PolyhedronContact polyhedron_contact_point(const PosedPolyhedron& a,
+                                                         const PosedPolyhedron& b,
+                                                         const PatchTest& need_patch,
+                                                         PlaneMemo* memo);
+
 /// Counters of the memory route in this thread (for tests and benchmarks): queries that tried it,
 /// and those it answered.
 struct PlaneMemoCounters {

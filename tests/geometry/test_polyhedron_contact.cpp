@@ -579,7 +579,8 @@ TEST(PolyhedronContact, MemoryChangesNoBit) {
     // with tight and loose bounds, refilled when the pair has moved too far, and meets pairs that
     // come apart. Every answer equals the full search's bit for bit (normal, depth, feature,
     // point, points, patch), with the patch asked for and not; the aligned cube stacks give
-    // face-on-face contacts with near ties.
+    // face-on-face contacts with near ties. The same through polyhedron_contact_point (its own
+    // memory), which leaves the points and the patch polygon empty.
     std::mt19937_64 rng(53);
     std::vector<g::PolyhedronFeatures> shapes;
     for (const std::string name :
@@ -602,6 +603,7 @@ TEST(PolyhedronContact, MemoryChangesNoBit) {
                                          2.0 * shapes[0].inradius - 1e-6 * (n + 1));
                 }
                 g::PlaneMemo memo;
+                g::PlaneMemo memo_point; // the same trajectory through polyhedron_contact_point
                 for (int t = 0; t < 40; ++t) {
                     const double size = shapes[i].radius + shapes[j].radius;
                     const double s = std::exp(step(rng));
@@ -612,6 +614,13 @@ TEST(PolyhedronContact, MemoryChangesNoBit) {
                     const g::PatchTest need = [want](const g::PolyhedronContact&) { return want; };
                     const g::PolyhedronContact full = g::polyhedron_contact(p.a, p.b, need);
                     expect_same_answer(g::polyhedron_contact(p.a, p.b, need, memo), full);
+                    // Without the points and the patch polygon: the rest the same bits.
+                    g::PolyhedronContact point =
+                        g::polyhedron_contact_point(p.a, p.b, need, &memo_point);
+                    EXPECT_TRUE(point.points.empty() && point.patch.empty());
+                    point.points = full.points;
+                    point.patch = full.patch;
+                    expect_same_answer(point, full);
                     touching += full.touching ? 1 : 0;
                 }
             }

@@ -1,0 +1,337 @@
+// A polyhedron pair's memory of its last common-plane search between steps (geometry::PlaneMemo,
+// polyhedron_contact.hpp; docs/architecture.md, "Memory of a polyhedron pair's common plane"):
+// the refill after a full search and the search from the memory's bounds. The stages it runs are
+// the full search's own (polyhedron_search.hpp), so its answers are the full search's, bit for bit.
+
+#include "geometry/polyhedron_search.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace kiln::geometry {
+
+namespace {
+
+using namespace search;
+
+/// Tolerance of the memory's bounds and tests, relative to the sum of the bounding radii (-):
+/// far above the round-off of the distances (1e-16 relative) and of the stored values, far below
+/// any overlap the law acts on. Bounds are widened by it, ties within it and overlaps or
+/// certificates thinner than it go to the full search.
+constexpr double kMemoTolerance = 1e-9;
+
+/// Relative motion (relative to the sum of the bounding radii) beyond which the memory is not
+/// read and the full search refills it: the bounds widen with the motion, so a memory far from
+/// the pose rules out little. A choice of speed only; the answer does not depend on it.
+constexpr double kMemoDrift = 0.01;
+
+thread_local PlaneMemoCounters memo_counters;
+
+/// The largest over k < n of min(d0[k], d1[k]), in four running maxima (the largest of a set does
+/// not depend on the order it is taken in; one chain of dependent maxima was the refill's critical
+/// path). -infinity for n = 0.
+double largest_of_pair_minima(const double* d0, const double* d1, std::size_t n) {
+    constexpr double lowest = -std::numeric_limits<double>::infinity();
+    double h0 = lowest;
+    double h1 = lowest;
+    double h2 = lowest;
+    double h3 = lowest;
+    std::size_t k = 0;
+    for (; k + 4 <= n; k += 4) {
+        h0 = std::max(h0, std::min(d0[k], d1[k]));
+        h1 = std::max(h1, std::min(d0[k + 1], d1[k + 1]));
+        h2 = std::max(h2, std::min(d0[k + 2], d1[k + 2]));
+        h3 = std::max(h3, std::min(d0[k + 3], d1[k + 3]));
+    }
+    for (; k < n; ++k) {
+        h0 = std::max(h0, std::min(d0[k], d1[k]));
+    }
+    return std::max(std::max(h0, h1), std::max(h2, h3));
+}
+
+/// Is the memory's certificate vertex still inside the other body by more than tol (m)? (B's
+/// planes in r: relative_faces done; -1: no vertex.)
+bool memo_inside(const PolyhedronFeatures& fa, const Relative& r, int vertex, double tol) {
+    const auto nvb = static_cast<int>(r.vb.size());
+    if (vertex < 0) {
+        return false;
+    }
+    if (vertex < nvb) {
+        const Vec3 x = r.vb[static_cast<std::size_t>(vertex)];
+        for (std::size_t k = 0; k < fa.face_normals.size(); ++k) {
+            if (!(fa.face_normals[k].dot(x) - fa.face_offsets[k] < -tol)) {
+                return false;
+            }
+        }
+        return true;
+    }
+    const Vec3 x = fa.vertices[static_cast<std::size_t>(vertex - nvb)];
+    for (std::size_t k = 0; k < r.nb.size(); ++k) {
+        if (!(r.nb[k].dot(x) - r.ob[k] < -tol)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+/// Does an edge cross the other body (the full search's second certificate)? The edge that did
+/// at the last query first, then the kept ones in r (A's, then B's); the one found is kept in
+/// memo.cross (A's edge e as e, B's as the count of A's edges + e).
+bool memo_crossing(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const Relative& r,
+                   PlaneMemo& memo) {
+    thread_local std::vector<int> one(1);
+    const auto nea = static_cast<int>(fa.edges.size());
+    if (memo.cross >= 0) {
+        one[0] = memo.cross < nea ? memo.cross : memo.cross - nea;
+        if (memo.cross < nea
+                ? edge_crosses(fa.edges, one, fa.vertices, r.nb, r.ob) >= 0
+                : edge_crosses(fb.edges, one, r.vb, fa.face_normals, fa.face_offsets) >= 0) {
+            return true;
+        }
+    }
+    int e = edge_crosses(fa.edges, r.edges_a, fa.vertices, r.nb, r.ob);
+    if (e < 0) {
+        e = edge_crosses(fb.edges, r.edges_b, r.vb, fa.face_normals, fa.face_offsets);
+        e = e < 0 ? -1 : nea + e;
+    }
+    memo.cross = e;
+    return e >= 0;
+}
+
+} // namespace
+
+namespace search {
+
+/// Refills the memory at the pose of r (make_relative and relative_faces done) from complete
+/// tables of distances, for a touching answer `best` (m, < 0), with the vertex deepest inside the
+/// other body as the certificate to try first (none: -1).
+void refill_memo(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const Relative& r,
+                 double best, PlaneMemo& memo) {
+    ++memo_counters.refills;
+    // The full search's tables where it filled them all (the values are bounds: any exact
+    // evaluation serves), else tables of their own.
+    thread_local std::vector<double> own_b; // B's vertices beyond A's planes
+    thread_local std::vector<double> own_a; // A's vertices beyond B's planes
+    thread_local std::vector<double> sep;
+    const std::size_t nfa = fa.face_normals.size();
+    const std::size_t nfb = fb.face_normals.size();
+    memo.values.resize(nfa + nfb + fa.edges.size() + fb.edges.size());
+    if (!r.full_tables) {
+        face_distances(fa.face_normals, fa.face_offsets, r.vb, own_b, sep);
+        face_distances(r.nb, r.ob, fa.vertices, own_a, sep);
+    }
+    const std::vector<double>& dist_b = r.full_tables ? r.dist_b.dist : own_b;
+    const std::vector<double>& dist_a = r.full_tables ? r.dist_a.dist : own_a;
+    // Separation along each face: the smallest distance in its column.
+    // (Row by row: an index modulo nf per entry was an integer division per distance.)
+    const auto columns = [](const std::vector<double>& dist, std::size_t nf, double* out) {
+        std::fill(out, out + nf, std::numeric_limits<double>::infinity());
+        const std::size_t rows = dist.size() / nf;
+        for (std::size_t i = 0; i < rows; ++i) {
+            const double* d = dist.data() + i * nf;
+            for (std::size_t k = 0; k < nf; ++k) {
+                out[k] = std::min(out[k], d[k]);
+            }
+        }
+    };
+    columns(dist_b, nfa, memo.values.data());
+    columns(dist_a, nfb, memo.values.data() + nfa);
+    // Per edge, the larger of the prune's two distances: beyond one face plane of the other body
+    // (the larger over the planes of the nearer end's distance), and beyond its bounding sphere.
+    const auto edge_reach = [](const std::vector<std::array<int, 4>>& edges,
+                               const std::vector<Vec3>& v, const std::vector<double>& dist,
+                               std::size_t nf, const Vec3& centre, double radius, double* out) {
+        for (std::size_t e = 0; e < edges.size(); ++e) {
+            const auto i0 = static_cast<std::size_t>(edges[e][0]);
+            const auto i1 = static_cast<std::size_t>(edges[e][1]);
+            const double* d0 = dist.data() + i0 * nf;
+            const double* d1 = dist.data() + i1 * nf;
+            const double m = std::sqrt(segment_point_distance2(v[i0], v[i1], centre)) - radius;
+            out[e] = std::max(m, largest_of_pair_minima(d0, d1, nf));
+        }
+    };
+    double* stored_edges = memo.values.data() + nfa + nfb;
+    edge_reach(fa.edges, fa.vertices, dist_a, nfb, r.shift, fb.radius, stored_edges);
+    edge_reach(fb.edges, r.vb, dist_b, nfa, Vec3::Zero(), fa.radius,
+               stored_edges + fa.edges.size());
+    // The vertex deepest inside the other body (smallest largest distance), B's first.
+    const double tol = kMemoTolerance * (fa.radius + fb.radius);
+    double deepest = -tol;
+    memo.inside = -1;
+    memo.cross = -1;
+    const auto scan = [&](const std::vector<double>& dist, std::size_t nf, std::size_t nv,
+                          int base) {
+        for (std::size_t i = 0; i < nv; ++i) {
+            const double* d = dist.data() + i * nf;
+            const double top = largest_of_pair_minima(d, d, nf);
+            if (top < deepest) {
+                deepest = top;
+                memo.inside = base + static_cast<int>(i);
+            }
+        }
+    };
+    scan(dist_b, nfa, r.vb.size(), 0);
+    scan(dist_a, nfb, fa.vertices.size(), static_cast<int>(r.vb.size()));
+    memo.valid = true;
+    memo.fa = &fa;
+    memo.fb = &fb;
+    memo.rot = r.rot;
+    memo.shift = r.shift;
+    memo.shift_in_b = r.rot.transpose() * r.shift;
+    memo.answer = best;
+}
+
+/// The common plane from the memory (see PlaneMemo), after make_relative: true with best, best_m
+/// (A's frame), c.feature and the prune's lists in r set as the full search sets them, when the
+/// bounds single out the answer; false (c and r to be reset) when the full search must run.
+///
+/// Why it is the full search's answer: a vertex of one body moves relative to the other by at
+/// most drift = |dR| r + |ds| (the change of the relative rotation in the Frobenius norm, which
+/// bounds the spectral one, times the bounding radius, plus the change of the centre's position),
+/// so every separation along a face and every distance beyond a plane moves by at most the drift,
+/// and the largest separation of all (the answer) too. A face whose stored separation plus the
+/// drift lies below a lower bound of the answer cannot win nor tie and is not evaluated; an edge
+/// whose stored distance beyond one plane minus the drift exceeds the prune's reach is one the full
+/// prune drops as well (the reach here is at least the full search's: its best face is at most
+/// the full search's). So the candidates evaluated include all the full search evaluates that can
+/// come near the answer, by the same expressions; the answer is kept only when it beats every
+/// other value met by the tolerance and a vertex lies inside the other body (then the full search
+/// has its certificate of overlap and takes no other path).
+bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Relative& r,
+                 PlaneMemo& memo, double& best, Vec3& best_m, PolyhedronContact& c) {
+    if (!memo.valid || memo.fa != &fa || memo.fb != &fb) {
+        return false;
+    }
+    ++memo_counters.tried;
+    const double scale = fa.radius + fb.radius;
+    const double tol = kMemoTolerance * scale;
+    const double turn = (r.rot - memo.rot).norm();
+    const double drift_b = turn * fb.radius + (r.shift - memo.shift).norm();
+    const double drift_a =
+        turn * fa.radius + (r.rot.transpose() * r.shift - memo.shift_in_b).norm();
+    if (!(std::max(drift_a, drift_b) <= kMemoDrift * scale)) {
+        return false;
+    }
+    const double floor = memo.answer - std::min(drift_a, drift_b) - tol; // <= the answer
+    thread_local std::vector<double> sep;
+    thread_local std::vector<double> bound;
+    double second = -std::numeric_limits<double>::infinity();
+    const std::size_t nfa = fa.face_normals.size();
+    const std::size_t nfb = fb.face_normals.size();
+    // Faces of A: a face is evaluated unless its bound (stored value, drift, round-off of the
+    // stored value, and the tie margin) lies below the running lower bound of the answer.
+    PlaneDistances tb(fa.face_normals, fa.face_offsets, r.vb, r.dist_b);
+    bound.resize(nfa);
+    for (std::size_t k = 0; k < nfa; ++k) {
+        bound[k] = memo.values[k] + drift_b + 2.0 * tol;
+    }
+    face_separations(tb, bound, floor, sep);
+    // The running values in locals (through the references they were stored at every face).
+    c.iterations += static_cast<int>(nfa + nfb);
+    int face = -1; // the face that raised the best last (A's k as k, B's as nfa + k)
+    double top = best;
+    {
+        double run = second;
+        for (std::size_t k = 0; k < nfa; ++k) {
+            if (sep[k] > top) {
+                run = top;
+                top = sep[k];
+                face = static_cast<int>(k);
+            } else {
+                run = std::max(run, sep[k]);
+            }
+        }
+        second = run;
+    }
+    if (!(top < -tol)) {
+        return false;
+    }
+    relative_faces(fb, r);
+    PlaneDistances ta(r.nb, r.ob, fa.vertices, r.dist_a);
+    bound.resize(nfb);
+    for (std::size_t k = 0; k < nfb; ++k) {
+        bound[k] = memo.values[nfa + k] + drift_a + 2.0 * tol;
+    }
+    face_separations(ta, bound, std::max(floor, top), sep);
+    {
+        double run = second;
+        for (std::size_t k = 0; k < nfb; ++k) {
+            if (sep[k] > top) {
+                run = top;
+                top = sep[k];
+                face = static_cast<int>(nfa + k);
+            } else {
+                run = std::max(run, sep[k]);
+            }
+        }
+        second = run;
+    }
+    best = top;
+    if (face >= 0 && static_cast<std::size_t>(face) < nfa) {
+        best_m = -fa.face_normals[static_cast<std::size_t>(face)];
+        c.feature = CommonPlaneFeature::kFaceOfA;
+    } else if (face >= 0) {
+        best_m = r.nb[static_cast<std::size_t>(face) - nfa];
+        c.feature = CommonPlaneFeature::kFaceOfB;
+    }
+    if (!(best < -tol)) {
+        return false;
+    }
+    // The prune from the stored distances (the full search's reach expression).
+    const double reach = -best + 1e-9 * (fa.radius + fb.radius);
+    // An edge is dropped when its stored distance, less the drift and the tolerance, exceeds the
+    // reach; written without a branch (most edges are dropped, the rest in no pattern). Up to 64
+    // edges, one bit per kept edge first (comparisons independent of each other), then the kept
+    // ones listed in order: appending at a running count made every comparison wait for the last.
+    const auto keep = [](const double* stored, std::size_t n, double bar, std::vector<int>& kept) {
+        if (n <= 64) {
+            std::uint64_t mask = 0;
+            for (std::size_t e = 0; e < n; ++e) {
+                mask |= static_cast<std::uint64_t>(!(stored[e] > bar)) << e;
+            }
+            kept.clear();
+            for (; mask != 0; mask &= mask - 1) {
+                kept.push_back(std::countr_zero(mask));
+            }
+            return;
+        }
+        kept.resize(n);
+        int* out = kept.data();
+        std::size_t m = 0;
+        for (std::size_t e = 0; e < n; ++e) {
+            out[m] = static_cast<int>(e);
+            m += stored[e] > bar ? 0U : 1U;
+        }
+        kept.resize(m);
+    };
+    const double* stored_edges = memo.values.data() + nfa + nfb;
+    keep(stored_edges, fa.edges.size(), reach + drift_a + tol, r.edges_a);
+    keep(stored_edges + fa.edges.size(), fb.edges.size(), reach + drift_b + tol, r.edges_b);
+    r.pruned = true;
+    relative_arcs(fb, r);
+    edge_stage(fa, fb, r, best, best_m, c, second);
+    if (!(best < -tol) || !(second < best - tol)) {
+        return false;
+    }
+    // The certificate of overlap: the stored vertex, else a kept edge crossing the other body
+    // (edge_crosses as the full search calls it: a crossing edge passes within the reach of the
+    // other body, so the full prune keeps it too, and the same expression gives the same answer).
+    if (!memo_inside(fa, r, memo.inside, tol) && !memo_crossing(fa, fb, r, memo)) {
+        return false;
+    }
+    ++memo_counters.answered;
+    return true;
+}
+
+} // namespace search
+
+PlaneMemoCounters& plane_memo_counters() {
+    return memo_counters;
+}
+
+} // namespace kiln::geometry
