@@ -326,9 +326,10 @@ void inner_touching_entries(const PairArrays& arrays, const InnerChunk& chunk, s
 /// registers, geometry and law (evaluate_lanes), then the results added to force/torque contact by
 /// contact in list order (`direct`, one thread) or written to rows[9 (first_row + a)] (several
 /// threads). Pair properties from `pairs` by the particles' `material`. Returns how many entries it
-/// took (a multiple of four); energy and max_ratio accumulate in entry order. `variant` selects the
-/// law's contact::LaneVariant (without_rolling only when rolling is 0).
-template <unsigned variant, class Law, bool direct, bool uniform>
+/// took (a multiple of four); energy and max_ratio accumulate in entry order (the energy only
+/// `with_energy`: otherwise the law's elastic energy is not formed and energy_sum is left as it
+/// is). `variant` selects the law's contact::LaneVariant (without_rolling only when rolling is 0).
+template <unsigned variant, class Law, bool direct, bool uniform, bool with_energy = true>
 std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std::int32_t* material,
                               double fn_floor, double rolling, double dt, const PairArrays& arrays,
                               const ActiveList& list, std::size_t n, std::size_t first_row,
@@ -479,7 +480,9 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
                 r[8] = c.tj[2][l];
             }
             set(a.shear[ks[l]], s.r[l], c.s[2][l]);
-            energy += c.energy[l];
+            if constexpr (with_energy) {
+                energy += c.energy[l];
+            }
         }
     }
     for (int l = 0; l < W; ++l) {
@@ -495,11 +498,11 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
 /// `variant` of the law (as contact_groups). Contact a is particle active[a] against wall
 /// wall_of[a] (wall material wall_material[wall]) with geometry geo[a] (world frame; the wall is
 /// body j, at rest, of infinite mass); histories in wall_shear[particle * nw + wall] (m). Forces
-/// and torques are added to the particles, energy and max_ratio accumulate, contact by contact in
-/// order. A last group of fewer than four repeats its last contact in the free lanes, whose results
-/// are dropped (a copy of a lane does not change which branch the group takes, so the kept lanes
-/// get the same bits).
-template <unsigned variant, class Law>
+/// and torques are added to the particles, energy (only `with_energy`) and max_ratio accumulate,
+/// contact by contact in order. A last group of fewer than four repeats its last contact in the
+/// free lanes, whose results are dropped (a copy of a lane does not change which branch the group
+/// takes, so the kept lanes get the same bits).
+template <unsigned variant, class Law, bool with_energy = true>
 void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
                  const int* wall_material, double fn_floor, double rolling, double dt,
                  const WallContact* geo, const std::uint32_t* active, const std::uint32_t* wall_of,
@@ -573,7 +576,9 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
             add_to(a.force[is[l]], f.r[l], c.f[2][l]);
             add_to(a.torque[is[l]], ti.r[l], c.ti[2][l]);
             set(wall_shear[hs[l]], s.r[l], c.s[2][l]);
-            energy += c.energy[l];
+            if constexpr (with_energy) {
+                energy += c.energy[l];
+            }
             max_ratio = std::max(max_ratio, ratio[l]);
         }
     }
@@ -604,37 +609,53 @@ decltype(auto) with_cheapest_variant(const PairTable& pairs, double rolling, Run
 }
 
 /// wall_groups with the cheapest variant of the law (with_cheapest_variant; the walls give no
-/// centre difference, so the history is projected with n).
+/// centre difference, so the history is projected with n). The elastic energy is summed only
+/// `with_energy`.
 template <class Law>
 void wall_contacts(const Law& law, const PairTable& pairs, const std::int32_t* material,
                    const int* wall_material, double fn_floor, double rolling, double dt,
                    const WallContact* geo, const std::uint32_t* active,
                    const std::uint32_t* wall_of, std::size_t n, std::size_t nw, const PairArrays& a,
-                   Vec3* wall_shear, double& energy, double& max_ratio) {
+                   Vec3* wall_shear, double& energy, double& max_ratio, bool with_energy) {
     with_cheapest_variant<contact::cap_when_sliding>(pairs, rolling, [&](auto variant) {
-        wall_groups<decltype(variant)::value>(law, pairs, material, wall_material, fn_floor,
-                                              rolling, dt, geo, active, wall_of, n, nw, a,
-                                              wall_shear, energy, max_ratio);
+        if (with_energy) {
+            wall_groups<decltype(variant)::value, Law, true>(
+                law, pairs, material, wall_material, fn_floor, rolling, dt, geo, active, wall_of, n,
+                nw, a, wall_shear, energy, max_ratio);
+        } else {
+            wall_groups<decltype(variant)::value, Law, false>(
+                law, pairs, material, wall_material, fn_floor, rolling, dt, geo, active, wall_of, n,
+                nw, a, wall_shear, energy, max_ratio);
+        }
     });
 }
 
 /// contact_groups_as with the cheapest variant of the law (with_cheapest_variant), the history
-/// projected with the centre difference; R* and m* taken once when a.same_radius is set.
+/// projected with the centre difference; R* and m* taken once when a.same_radius is set; the
+/// elastic energy summed only `with_energy`.
 template <class Law, bool direct>
 std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
                            double fn_floor, double rolling, double dt, const PairArrays& a,
                            const ActiveList& active, std::size_t n, std::size_t first_row,
-                           double& energy, double& max_ratio) {
+                           double& energy, double& max_ratio, bool with_energy) {
     constexpr unsigned base = contact::cap_when_sliding | contact::project_by_distance;
     return with_cheapest_variant<base>(pairs, rolling, [&](auto variant) {
+        constexpr unsigned v = decltype(variant)::value;
         if (a.same_radius > 0.0) {
-            return contact_groups_as<decltype(variant)::value, Law, direct, true>(
-                law, pairs, material, fn_floor, rolling, dt, a, active, n, first_row, energy,
-                max_ratio);
+            return with_energy ? contact_groups_as<v, Law, direct, true, true>(
+                                     law, pairs, material, fn_floor, rolling, dt, a, active, n,
+                                     first_row, energy, max_ratio)
+                               : contact_groups_as<v, Law, direct, true, false>(
+                                     law, pairs, material, fn_floor, rolling, dt, a, active, n,
+                                     first_row, energy, max_ratio);
         }
-        return contact_groups_as<decltype(variant)::value, Law, direct, false>(
-            law, pairs, material, fn_floor, rolling, dt, a, active, n, first_row, energy,
-            max_ratio);
+        return with_energy
+                   ? contact_groups_as<v, Law, direct, false, true>(law, pairs, material, fn_floor,
+                                                                    rolling, dt, a, active, n,
+                                                                    first_row, energy, max_ratio)
+                   : contact_groups_as<v, Law, direct, false, false>(law, pairs, material, fn_floor,
+                                                                     rolling, dt, a, active, n,
+                                                                     first_row, energy, max_ratio);
     });
 }
 #endif

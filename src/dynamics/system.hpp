@@ -191,6 +191,11 @@ class System {
         use_inner_ = on;
         inner_valid_ = false;
     }
+    /// Lets advance() form the elastic energy of the sphere contacts (pairs and walls) only at its
+    /// last step, the one whose counters() and energies() can be read (on, the default), or at
+    /// every step (off). Positions, velocities, forces and the counters read after a step(),
+    /// advance() or refresh() are the same bits either way (tests, A/B).
+    void use_energy_on_demand(bool on) { energy_on_demand_ = on; }
     /// Lets the register path of the sphere pairs take R* and m* once when every particle has the
     /// same radius and mass (on, the default; from the next list build) or per contact (off, at
     /// once). The results are the same bits either way (tests, A/B).
@@ -295,12 +300,14 @@ class System {
     std::vector<double> room2_;
     std::vector<std::vector<std::uint32_t>> unit_loose_; // loose particles found by the pass
     double inner_gap_ = 0;                               // m
-    bool inner_valid_ = false;    // the inner lists hold every entry that can touch
-    bool inner_used_ = false;     // the last filter ran on the inner lists (touched_ is stale)
-    bool use_inner_ = true;       // use_inner_list()
-    bool use_uniform_ = true;     // use_uniform_sizes()
-    std::size_t inner_loose_ = 0; // loose particles since the inner build
-    long inner_next_build_ = 0;   // no inner build before this step (after dropping them)
+    bool inner_valid_ = false;     // the inner lists hold every entry that can touch
+    bool inner_used_ = false;      // the last filter ran on the inner lists (touched_ is stale)
+    bool use_inner_ = true;        // use_inner_list()
+    bool use_uniform_ = true;      // use_uniform_sizes()
+    bool energy_on_demand_ = true; // use_energy_on_demand()
+    bool form_energy_ = true;      // the next force evaluation sums the elastic energy
+    std::size_t inner_loose_ = 0;  // loose particles since the inner build
+    long inner_next_build_ = 0;    // no inner build before this step (after dropping them)
     static constexpr long inner_holdoff = 200;              // steps
     long inner_steps_ = 0;                                  // inner_list_steps()
     long inner_loosened_ = 0;                               // inner_list_loosened()

@@ -3,8 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <memory>
 #include <random>
+#include <string>
 #include <variant>
 #include <vector>
 
@@ -474,6 +476,66 @@ TEST(System, UniformSizesGiveTheBitsOfThePerContactSizes) {
             EXPECT_EQ(general.counters().elastic_energy, uniform.counters().elastic_energy);
         }
         EXPECT_GT(contacts, 0);
+    }
+}
+
+// advance() forms the elastic energy of the sphere contacts only at its last step (the one whose
+// counters can be read); with use_energy_on_demand(false) at every step. Both must give the same
+// bits for the state and the same counters and energies whenever they can be read: after advance()
+// runs of any length (1 takes the unfused path), after step() and after a restart. The pour has two
+// material pairs, walls and rolling resistance; the lattice one radius and one material pair (the
+// register path's sizes taken once and its variant with friction in every pair).
+TEST(System, EnergyOnDemandGivesTheEnergiesOfEveryStep) {
+    for (const int scene : {0, 1}) {
+        for (const int threads : {1, 2}) {
+            const auto spec = [&] {
+                return scene == 0 ? threaded_pour(threads) : quiet_lattice(threads);
+            };
+            System every(spec());
+            every.use_energy_on_demand(false);
+            auto on_demand = std::make_unique<System>(spec());
+            double largest = 0.0;
+            const std::vector<long> runs = {1, 2, 3, 97, 1, 396, 500};
+            for (std::size_t r = 0; r < runs.size(); ++r) {
+                every.advance(runs[r]);
+                if (r == 4) {
+                    auto restarted = std::make_unique<System>(spec());
+                    restarted->restore_state(on_demand->save_state());
+                    on_demand = std::move(restarted);
+                }
+                on_demand->advance(runs[r]);
+                if (r == 5) {
+                    every.step();
+                    on_demand->step();
+                }
+                const std::string at = std::to_string(threads) + " threads, scene " +
+                                       std::to_string(scene) + ", step " +
+                                       std::to_string(every.step_count());
+                ASSERT_EQ(every.step_count(), on_demand->step_count()) << at;
+                const ParticleStore& a = every.particles();
+                const ParticleStore& b = on_demand->particles();
+                // Tolerance: none. The energy is a sum beside the forces, not an input to them.
+                EXPECT_EQ(a.x, b.x) << at;
+                EXPECT_EQ(a.v, b.v) << at;
+                EXPECT_EQ(a.omega, b.omega) << at;
+                EXPECT_EQ(a.force, b.force) << at;
+                EXPECT_EQ(a.torque, b.torque) << at;
+                EXPECT_EQ(every.counters().particle_contacts,
+                          on_demand->counters().particle_contacts)
+                    << at;
+                EXPECT_EQ(every.counters().wall_contacts, on_demand->counters().wall_contacts)
+                    << at;
+                EXPECT_EQ(every.counters().elastic_energy, on_demand->counters().elastic_energy)
+                    << at;
+                EXPECT_EQ(every.counters().max_overlap_ratio,
+                          on_demand->counters().max_overlap_ratio)
+                    << at;
+                EXPECT_EQ(every.energies().elastic, on_demand->energies().elastic) << at;
+                EXPECT_EQ(every.energies().total(), on_demand->energies().total()) << at;
+                largest = std::max(largest, on_demand->counters().elastic_energy);
+            }
+            EXPECT_GT(largest, 0.0) << threads << " threads, scene " << scene;
+        }
     }
 }
 
