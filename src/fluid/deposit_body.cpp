@@ -97,13 +97,9 @@ void ClumpBody::rows(std::span<const Vec3> centres, double ox, double h, double 
         if (w2 < 0.0) {
             continue;
         }
-        const double w = std::sqrt(w2);
-        const double a0 = std::ceil((c.x() - w - ox) / h - 0.5);
-        const double a1 = std::floor((c.x() + w - ox) / h - 0.5);
-        const auto first = static_cast<long>(std::max(a0, static_cast<double>(lo)));
-        const auto last = static_cast<long>(std::min(a1, static_cast<double>(hi)));
-        if (first <= last) {
-            out.push_back({first, last});
+        const RowRun run = chord_run(c.x(), std::sqrt(w2), ox, h, lo, hi);
+        if (run.first <= run.last) {
+            out.push_back(run);
         }
     }
     std::sort(out.begin(), out.end(),

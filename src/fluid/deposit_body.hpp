@@ -16,10 +16,10 @@
 
 namespace kiln::fluid {
 
-/// The sub-cells of one row that lie inside a body: t = first..last of the row's points
-/// p(t) = p0 + t step (body frame), t = 0..n. Empty when first > last. When `decided` is false the
-/// row runs along one of the body's face planes (within round-off) and the caller tests every
-/// point with the body's inside test instead.
+/// The points of one row that lie inside a body: first..last, as step numbers along the row
+/// (clip_row) or as sub-cell indices (chord_run, ClumpBody::rows). Empty when first > last. When
+/// `decided` is false the row runs along one of a polyhedron's face planes (within round-off) and
+/// the caller tests every point with the body's inside test instead.
 struct RowRun {
     long first = 0;
     long last = -1;
@@ -27,10 +27,20 @@ struct RowRun {
 };
 
 /// Width (in steps) of the band around each end of a row's exact interval where the inside test
-/// decides instead of the interval: the interval's round-off is below 1e-9 steps for bodies up to
-/// 100 sub-cells across (docs/theory/fluid.md, "Rows clipped by the body"), so points outside the
-/// bands get the same answer from both.
+/// decides instead of the interval: the interval's round-off is below 1e-8 steps for bodies up to
+/// 100 sub-cells across (docs/theory/fluid.md, "Convex polyhedra: rows clipped by the faces"), so
+/// points outside the bands get the same answer from both.
 inline constexpr double kRowTie = 1e-6;
+
+/// The sub-cells a in [lo, hi] of a row along world x (sub-cell size h, grid origin ox, m) whose
+/// centres ox + (a + 1/2) h lie on the chord [cx - w, cx + w] (m): the rule of a sphere's rows,
+/// also each clump member's.
+inline RowRun chord_run(double cx, double w, double ox, double h, long lo, long hi) {
+    const double a0 = std::ceil((cx - w - ox) / h - 0.5);
+    const double a1 = std::floor((cx + w - ox) / h - 0.5);
+    return {static_cast<long>(std::max(a0, static_cast<double>(lo))),
+            static_cast<long>(std::min(a1, static_cast<double>(hi)))};
+}
 
 namespace detail {
 /// The integer points of the exact interval [lo, hi] (within [0, n]) that `inside` accepts: the
@@ -75,7 +85,7 @@ struct PlanesBody {
 };
 
 /// A polyhedron's face planes posed in the world for rows along world x with step h
-/// (PlanesBody::pose): face f holds the world points p with n_f . p <= e_f.
+/// (pose_planes): face f holds the world points p with n_f . p <= e_f.
 struct PosedPlanes {
     std::vector<Vec3> normal;        ///< outward unit normals (world frame)
     std::vector<double> offset;      ///< e_f = n_f . x + d_f (m)

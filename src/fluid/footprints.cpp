@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <type_traits>
 #include <variant>
 
 #ifdef _OPENMP
@@ -217,13 +216,9 @@ void scan_sphere(const TransferGrid& g, const SphereBody& s, const Vec3& x, cons
             if (w2 < 0.0) {
                 continue;
             }
-            const double w = std::sqrt(w2);
-            const double a0 = std::ceil((x.x() - w - o.x()) / h - 0.5);
-            const double a1 = std::floor((x.x() + w - o.x()) / h - 0.5);
-            const auto lo = static_cast<long>(std::max(a0, static_cast<double>(r.lo[0])));
-            const auto hi = static_cast<long>(std::min(a1, static_cast<double>(r.hi[0])));
-            if (lo <= hi) {
-                scan.add_run(lo, hi, b, c);
+            const RowRun run = chord_run(x.x(), std::sqrt(w2), o.x(), h, r.lo[0], r.hi[0]);
+            if (run.first <= run.last) {
+                scan.add_run(run.first, run.last, b, c);
             }
         }
     }
@@ -301,9 +296,8 @@ void scan_planes(const TransferGrid& g, const PlanesBody& body, double rb, const
 
 // Runs of a superquadric: every sub-cell of the row's chord of the bounding sphere (radius rb)
 // tested in the body frame.
-template <class Body>
-void scan_body(const TransferGrid& g, const Body& body, double rb, const Vec3& x, const Mat3& rot,
-               const SubRange& r, Scan& scan) {
+void scan_superquadric(const TransferGrid& g, const SuperquadricBody& body, double rb,
+                       const Vec3& x, const Mat3& rot, const SubRange& r, Scan& scan) {
     const double h = g.sub_cell_size();
     const Vec3& o = g.origin();
     const Mat3 rt = rot.transpose();
@@ -316,15 +310,11 @@ void scan_body(const TransferGrid& g, const Body& body, double rb, const Vec3& x
             if (w2 < 0.0) {
                 continue;
             }
-            const double w = std::sqrt(w2);
-            const auto lo = static_cast<long>(
-                std::max(std::ceil((x.x() - w - o.x()) / h - 0.5), static_cast<double>(r.lo[0])));
-            const auto hi = static_cast<long>(
-                std::min(std::floor((x.x() + w - o.x()) / h - 0.5), static_cast<double>(r.hi[0])));
+            const RowRun chord = chord_run(x.x(), std::sqrt(w2), o.x(), h, r.lo[0], r.hi[0]);
             const Vec3 start =
-                Vec3(o.x() + (static_cast<double>(lo) + 0.5) * h, dy + x.y(), dz + x.z());
+                Vec3(o.x() + (static_cast<double>(chord.first) + 0.5) * h, dy + x.y(), dz + x.z());
             const Vec3 p0 = rt * (start - x);
-            scan_points(body, p0, step, lo, hi, b, c, scan);
+            scan_points(body, p0, step, chord.first, chord.last, b, c, scan);
         }
     }
 }
@@ -373,8 +363,8 @@ ParticleResult deposit_one(const TransferGrid& g, const DepositTemplate& t, cons
         } else if (const auto* pl = std::get_if<PlanesBody>(&t.body)) {
             scan_planes(g, *pl, t.bounding_radius, x, rot, range, scan, buf.posed);
         } else {
-            scan_body(g, std::get<SuperquadricBody>(t.body), t.bounding_radius, x, rot, range,
-                      scan);
+            scan_superquadric(g, std::get<SuperquadricBody>(t.body), t.bounding_radius, x, rot,
+                              range, scan);
         }
         if (scan.total() > 0) {
             centroid = scan.centroid();
