@@ -604,7 +604,7 @@ bool polyhedra_apart_along(const Element& a, const Element& b, const Vec3& sep, 
     const geometry::PosedPolyhedron pa{a.poly, a.centre, a.q};
     const geometry::PosedPolyhedron pb{b.poly, b.centre, b.q};
     overlap = geometry::polyhedron_overlap_along(pa, pb, sep);
-    return overlap < -kSeparationMargin * (a.radius + b.radius);
+    return overlap < -polyhedra_separation_margin(a, b);
 }
 
 double polyhedra_separation_margin(const Element& a, const Element& b) {

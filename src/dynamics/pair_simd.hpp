@@ -608,6 +608,12 @@ decltype(auto) with_cheapest_variant(const PairTable& pairs, double rolling, Run
                           : run(std::integral_constant<unsigned, base>{});
 }
 
+/// Calls run(std::true_type) or run(std::false_type) as `on` says: a run-time switch turned into
+/// a template argument.
+template <class Run> decltype(auto) with_flag(bool on, Run&& run) {
+    return on ? run(std::true_type{}) : run(std::false_type{});
+}
+
 /// wall_groups with the cheapest variant of the law (with_cheapest_variant; the walls give no
 /// centre difference, so the history is projected with n). The elastic energy is summed only
 /// `with_energy`.
@@ -618,15 +624,11 @@ void wall_contacts(const Law& law, const PairTable& pairs, const std::int32_t* m
                    const std::uint32_t* wall_of, std::size_t n, std::size_t nw, const PairArrays& a,
                    Vec3* wall_shear, double& energy, double& max_ratio, bool with_energy) {
     with_cheapest_variant<contact::cap_when_sliding>(pairs, rolling, [&](auto variant) {
-        if (with_energy) {
-            wall_groups<decltype(variant)::value, Law, true>(
+        with_flag(with_energy, [&](auto sum_energy) {
+            wall_groups<decltype(variant)::value, Law, decltype(sum_energy)::value>(
                 law, pairs, material, wall_material, fn_floor, rolling, dt, geo, active, wall_of, n,
                 nw, a, wall_shear, energy, max_ratio);
-        } else {
-            wall_groups<decltype(variant)::value, Law, false>(
-                law, pairs, material, wall_material, fn_floor, rolling, dt, geo, active, wall_of, n,
-                nw, a, wall_shear, energy, max_ratio);
-        }
+        });
     });
 }
 
@@ -640,22 +642,14 @@ std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::in
                            double& energy, double& max_ratio, bool with_energy) {
     constexpr unsigned base = contact::cap_when_sliding | contact::project_by_distance;
     return with_cheapest_variant<base>(pairs, rolling, [&](auto variant) {
-        constexpr unsigned v = decltype(variant)::value;
-        if (a.same_radius > 0.0) {
-            return with_energy ? contact_groups_as<v, Law, direct, true, true>(
-                                     law, pairs, material, fn_floor, rolling, dt, a, active, n,
-                                     first_row, energy, max_ratio)
-                               : contact_groups_as<v, Law, direct, true, false>(
-                                     law, pairs, material, fn_floor, rolling, dt, a, active, n,
-                                     first_row, energy, max_ratio);
-        }
-        return with_energy
-                   ? contact_groups_as<v, Law, direct, false, true>(law, pairs, material, fn_floor,
-                                                                    rolling, dt, a, active, n,
-                                                                    first_row, energy, max_ratio)
-                   : contact_groups_as<v, Law, direct, false, false>(law, pairs, material, fn_floor,
-                                                                     rolling, dt, a, active, n,
-                                                                     first_row, energy, max_ratio);
+        return with_flag(a.same_radius > 0.0, [&](auto uniform) {
+            return with_flag(with_energy, [&](auto sum_energy) {
+                return contact_groups_as<decltype(variant)::value, Law, direct,
+                                         decltype(uniform)::value, decltype(sum_energy)::value>(
+                    law, pairs, material, fn_floor, rolling, dt, a, active, n, first_row, energy,
+                    max_ratio);
+            });
+        });
     });
 }
 #endif
