@@ -362,6 +362,17 @@ SceneSpec convex_pour() {
     return s;
 }
 
+/// Steps two systems `steps` times side by side, asserting the same particle contact count at
+/// every step; `contacts` sums `with`'s counts.
+void step_both(System& with, System& without, int steps, long& contacts) {
+    for (int k = 0; k < steps; ++k) {
+        with.step();
+        without.step();
+        contacts += with.counters().particle_contacts;
+        ASSERT_EQ(with.counters().particle_contacts, without.counters().particle_contacts) << k;
+    }
+}
+
 /// Positions, velocities, orientations and angular momenta of two runs agree bit for bit.
 void expect_same_bits(const ParticleStore& p, const ParticleStore& q) {
     ASSERT_EQ(p.size(), q.size());
@@ -381,12 +392,7 @@ TEST(Polyhedra, SeparationCacheChangesNoBit) {
     System without(convex_pour());
     without.use_separation_cache(false);
     long contacts = 0;
-    for (int k = 0; k < 30000; ++k) {
-        with.step();
-        without.step();
-        contacts += with.counters().particle_contacts;
-        ASSERT_EQ(with.counters().particle_contacts, without.counters().particle_contacts) << k;
-    }
+    ASSERT_NO_FATAL_FAILURE(step_both(with, without, 30000, contacts));
     EXPECT_GT(contacts, 20000);
     EXPECT_GT(with.separation_skips(), 100000);
     EXPECT_EQ(without.separation_skips(), 0);
@@ -404,12 +410,7 @@ TEST(Polyhedra, PlaneMemoChangesNoBit) {
     without.use_plane_memo(false);
     const long answered0 = kiln::geometry::plane_memo_counters().answered;
     long contacts = 0;
-    for (int k = 0; k < 30000; ++k) {
-        with.step();
-        without.step();
-        contacts += with.counters().particle_contacts;
-        ASSERT_EQ(with.counters().particle_contacts, without.counters().particle_contacts) << k;
-    }
+    ASSERT_NO_FATAL_FAILURE(step_both(with, without, 30000, contacts));
     const long answered = kiln::geometry::plane_memo_counters().answered - answered0;
     EXPECT_GT(contacts, 20000);
     EXPECT_GT(answered, 1000);
