@@ -171,13 +171,21 @@ TEST(CaseReader, GroupTemperatureMonitorsNameTheSpheresOrAShapeOfTheCase) {
 
 // --- Non-spherical particles -------------------------------------------------------------------
 
+/// A folder under the temporary directory named for `stem` and the running test: ctest runs the
+/// tests in parallel processes, and two tests writing and removing one folder raced (a test found
+/// its mesh file deleted by the other).
+std::filesystem::path test_folder(const std::string& stem) {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    return std::filesystem::temp_directory_path() / (stem + "_" + info->name());
+}
+
 namespace shapes_test {
 
 /// A folder with one case and its own shape templates, removed at the end of the test.
 struct CaseFolder {
     std::filesystem::path dir;
     CaseFolder() {
-        dir = std::filesystem::temp_directory_path() / "kiln_test_case_shapes";
+        dir = test_folder("kiln_test_case_shapes");
         std::filesystem::create_directories(dir);
         write("rod_ok.toml", "kind = \"superquadric\"\nhalf_axes = [1.0e-3, 1.0e-4, 1.0e-4]\n"
                              "exponents = [0.5, 1.0]\n");
@@ -336,7 +344,7 @@ TEST(CaseReader, SuperquadricAspectRatioAboveTenIsRefused) {
 struct MeshFolder {
     std::filesystem::path dir;
     MeshFolder() {
-        dir = std::filesystem::temp_directory_path() / "kiln_test_case_meshes";
+        dir = test_folder("kiln_test_case_meshes");
         std::filesystem::create_directories(dir);
         std::ofstream(dir / "plate.obj") << "v 0 0 0\nv 0.02 0 0\nv 0.02 0.02 0\nv 0 0.02 0\n"
                                             "f 1 2 3\nf 1 3 4\n";
