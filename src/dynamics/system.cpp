@@ -293,11 +293,16 @@ void System::index_bodies() {
     }
     if (!has_bodies_) {
         sep_dirs_.clear();
+        sep_proofs_.clear();
         return;
     }
     const auto& nb = nl_.partners();
     const auto& owner = nl_.owners();
-    sep_dirs_.assign(nb.size(), Vec3::Zero()); // the entries changed: no cached direction
+    sep_dirs_.assign(nb.size(), Vec3::Zero());        // the entries changed: no cached direction
+    sep_proofs_.assign(nb.size(), SeparationProof{}); // nor a proof along one
+    // A memory is checked against the pair's shapes and relative pose before it is read, so the
+    // entries keep theirs (and their storage): a memory of another pair is refilled.
+    plane_memos_.resize(nb.size());
     for (std::size_t k = 0; k < nb.size(); ++k) {
         if (p_.shape[owner[k]] >= 0 || p_.shape[nb[k]] >= 0) {
             body_entries_.push_back(static_cast<std::uint32_t>(k));

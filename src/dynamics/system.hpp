@@ -347,15 +347,16 @@ class System {
     // Per list entry of two single polyhedra: the memory of its last common-plane search, read
     // when the pair touched at the last step (element_contact's `memo`). It depends on the two
     // shapes and their relative pose only, so it needs no reset at a list build or restart (a
-    // memory from another pose is refilled); the answers do not depend on it.
+    // memory from another pose is refilled); sized with sep_dirs_ at the list build (index_bodies).
+    // The answers do not depend on it.
     std::vector<geometry::PlaneMemo> plane_memos_;
     bool plane_memo_ = true;
     // Per list entry of two single polyhedra whose cached direction proved them apart: the pose
     // of that proof (overlap along the direction, the direction's component of the centres'
     // difference, both orientations), from which a later step bounds the overlap without the
     // vertex scan (body_forces, general_entry). Valid only until the entry's direction changes:
-    // cleared whenever the entry takes the full route (a list build zeroes the directions, which
-    // only the full route sets again, so no reset is needed). The answers do not depend on it.
+    // cleared whenever the entry takes the full route, and at every list build (beside
+    // sep_dirs_). The answers do not depend on it.
     struct SeparationProof {
         bool valid = false;
         double overlap = 0.0; // overlap along the direction at the proof (m, < 0)

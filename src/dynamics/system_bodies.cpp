@@ -692,12 +692,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // ordered): bounding spheres, the elements of each that reach the other, then every
             // element pair through the narrow phase (sphere pairs through the queue).
             std::vector<std::uint32_t> near_b;
-            if (plane_memos_.size() < sep_dirs_.size()) {
-                plane_memos_.resize(sep_dirs_.size());
-            }
-            if (sep_proofs_.size() < sep_dirs_.size()) {
-                sep_proofs_.resize(sep_dirs_.size());
-            }
             const auto general_entry = [&](std::uint32_t k, std::uint32_t a, std::uint32_t b) {
                 const double rsum = p_.radius[a] + p_.radius[b];
                 if ((p_.x[a] - p_.x[b]).squaredNorm() >= rsum * rsum) {
@@ -770,9 +764,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         }
                     }
                 }
-                if (k < sep_proofs_.size()) {
-                    sep_proofs_[k].valid = false; // the full route may change the direction
-                }
+                sep_proofs_[k].valid = false; // the full route may change the direction
                 // Elements of b that reach into a's bounding sphere (a clump pair touches with a
                 // few of its members: 12 x 12 candidate pairs become about 2 x 2).
                 near_b.clear();
