@@ -294,6 +294,7 @@ void System::index_bodies() {
     if (!has_bodies_) {
         sep_dirs_.clear();
         sep_proofs_.clear();
+        apart_below_.clear();
         return;
     }
     const auto& nb = nl_.partners();
@@ -303,6 +304,10 @@ void System::index_bodies() {
     // A memory is checked against the pair's shapes and relative pose before it is read, so the
     // entries keep theirs (and their storage): a memory of another pair is refilled.
     plane_memos_.resize(nb.size());
+    apart_below_.assign(nb.size(), -std::numeric_limits<double>::infinity());
+    travel_.assign(p_.size(), 0.0);
+    travel_x_ = p_.x;
+    travel_q_ = p_.q;
     for (std::size_t k = 0; k < nb.size(); ++k) {
         if (p_.shape[owner[k]] >= 0 || p_.shape[nb[k]] >= 0) {
             body_entries_.push_back(static_cast<std::uint32_t>(k));

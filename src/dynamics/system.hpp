@@ -365,7 +365,20 @@ class System {
         Quat qb = Quat::Identity();
     };
     std::vector<SeparationProof> sep_proofs_;
-    bool convex_blocks_ = true; // see use_convex_blocks
+    // Near misses skipped for several steps (body_forces): travel_[i] bounds how far any point of
+    // polyhedron body i has moved since the last list build (m; the centre's step plus the
+    // bounding radius times the change of the rotation, |R - R0| <= 2 min |q -+ q0|, in 1-norms,
+    // summed step by step and rounded upwards), brought up to the pose (travel_x_, travel_q_) at
+    // every posing. apart_below_[k]: when entry k's proof holds, the overlap along its direction
+    // stays below minus twice the margin while travel_[a] + travel_[b] stays below this (m;
+    // -infinity: no such bound); the first pass then counts the entry as proved apart without
+    // visiting it. Reset at every list build, cleared with the proof.
+    std::vector<double> travel_;
+    std::vector<Vec3> travel_x_;
+    std::vector<Quat> travel_q_;
+    std::vector<double> apart_below_;
+    std::vector<std::uint32_t> skipped_; // this step's skipped near misses (scratch)
+    bool convex_blocks_ = true;          // see use_convex_blocks
     long separation_skips_ = 0;
     // Compact histories, parallel to member_pairs_ (docs/architecture.md, "Contact records"): the
     // key of each member pair (ids, element indices in each particle; -1 for a general item), set
