@@ -305,7 +305,9 @@ void System::index_bodies() {
     // entries keep theirs (and their storage): a memory of another pair is refilled.
     plane_memos_.resize(nb.size());
     apart_below_.assign(nb.size(), -std::numeric_limits<double>::infinity());
-    travel_.assign(p_.size(), 0.0);
+    travel_.assign(p_.size(), 0.0); // every bound read against it goes too
+    std::fill(wall_apart_below_.begin(), wall_apart_below_.end(),
+              -std::numeric_limits<double>::infinity());
     travel_x_ = p_.x;
     travel_q_ = p_.q;
     for (std::size_t k = 0; k < nb.size(); ++k) {
@@ -452,6 +454,7 @@ void System::find_wall_candidates() {
         }
         body_wall_offsets_[b + 1] = static_cast<std::uint32_t>(body_walls_.size());
     }
+    wall_apart_below_.assign(body_walls_.size(), -std::numeric_limits<double>::infinity());
 }
 
 void System::refresh() {

@@ -378,7 +378,12 @@ class System {
     std::vector<Quat> travel_q_;
     std::vector<double> apart_below_;
     std::vector<std::uint32_t> skipped_; // this step's skipped near misses (scratch)
-    bool convex_blocks_ = true;          // see use_convex_blocks
+    // Per body-wall candidate (body_walls_): for a single polyhedron apart from a plane wall, the
+    // travel_ of the body below which its deepest vertex stays above the wall by more than the
+    // margin (m; -infinity: none); body_forces then skips the query, whose answer is "apart" and
+    // leaves no record. Reset with body_walls_ (find_wall_candidates).
+    std::vector<double> wall_apart_below_;
+    bool convex_blocks_ = true; // see use_convex_blocks
     long separation_skips_ = 0;
     // Compact histories, parallel to member_pairs_ (docs/architecture.md, "Contact records"): the
     // key of each member pair (ids, element indices in each particle; -1 for a general item), set

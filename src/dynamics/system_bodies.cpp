@@ -1072,8 +1072,18 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                             continue;
                         }
                         const Element& A = elements_[ea];
+                        // A single polyhedron whose deepest vertex was above this plane wall by
+                        // more than the margin: it is still, as long as the body has moved less
+                        // than that height since (travel_; the wall is at rest).
+                        const bool single = element_begin_[a + 1] - a0 == 1;
+                        if (single && travel_[a] < wall_apart_below_[c]) {
+                            continue;
+                        }
                         const ElementContact ec = element_wall_contact(A, ws);
                         if (!ec.touching) {
+                            if (single && A.kind == Element::Kind::polyhedron) {
+                                wall_apart_below_[c] = travel_[a] + ec.wall_gap - 1e-9 * A.radius;
+                            }
                             continue;
                         }
                         if (convex_blocks_) {
