@@ -309,6 +309,13 @@ void System::index_bodies() {
     std::fill(wall_apart_below_.begin(), wall_apart_below_.end(),
               -std::numeric_limits<double>::infinity());
     travel_x_ = p_.x;
+    travel_r_.assign(p_.size(), 0.0);
+    for (const std::uint32_t i : bodies_) {
+        const auto s = static_cast<std::size_t>(p_.shape[i]);
+        if (s < poly_features_.size() && !poly_features_[s].edges.empty()) {
+            travel_r_[i] = poly_features_[s].radius;
+        }
+    }
     travel_q_ = p_.q;
     for (std::size_t k = 0; k < nb.size(); ++k) {
         if (p_.shape[owner[k]] >= 0 || p_.shape[nb[k]] >= 0) {

@@ -374,6 +374,7 @@ class System {
     // -infinity: no such bound); the first pass then counts the entry as proved apart without
     // visiting it. Reset at every list build, cleared with the proof.
     std::vector<double> travel_;
+    std::vector<double> travel_r_; // per particle: a polyhedron's bounding radius, else 0 (m)
     std::vector<Vec3> travel_x_;
     std::vector<Quat> travel_q_;
     std::vector<double> apart_below_;

@@ -302,16 +302,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             !poly_features_[static_cast<std::size_t>(p_.shape[i])].edges.empty()
                 ? &poly_features_[static_cast<std::size_t>(p_.shape[i])]
                 : nullptr;
-        if (features != nullptr && i < travel_.size()) { // see travel_ (system.hpp)
-            const Vec3 dx = p_.x[i] - travel_x_[i];
-            const double minus = (p_.q[i].coeffs() - travel_q_[i].coeffs()).lpNorm<1>();
-            const double plus = (p_.q[i].coeffs() + travel_q_[i].coeffs()).lpNorm<1>();
-            const double step =
-                (dx.lpNorm<1>() + 2.0 * features->radius * std::min(minus, plus)) * (1.0 + 1e-9);
-            travel_[i] = (travel_[i] + step) * (1.0 + 1e-15); // >= the exact sum
-            travel_x_[i] = p_.x[i];
-            travel_q_[i] = p_.q[i];
-        }
         pose_buf_.clear();
         append_elements(t, features, p_.x[i], p_.q[i], rot_[i], p_.radius[i], pose_buf_);
         for (const Element& E : pose_buf_) {
@@ -328,6 +318,21 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
         }
     }
     element_begin_[p_.size()] = static_cast<std::uint32_t>(member_c_.size());
+    // travel_ brought up to this pose (system.hpp), in a loop of its own over the bodies (inside
+    // the posing loop above its chain of operations waited on that loop's branches). Only
+    // polyhedra read it: travel_r_ is 0 for the other bodies.
+    if (travel_.size() == p_.size()) {
+        for (const std::uint32_t i : bodies_) {
+            const Vec3 dx = p_.x[i] - travel_x_[i];
+            const double minus = (p_.q[i].coeffs() - travel_q_[i].coeffs()).lpNorm<1>();
+            const double plus = (p_.q[i].coeffs() + travel_q_[i].coeffs()).lpNorm<1>();
+            const double step =
+                (dx.lpNorm<1>() + 2.0 * travel_r_[i] * std::min(minus, plus)) * (1.0 + 1e-9);
+            travel_[i] = (travel_[i] + step) * (1.0 + 1e-15); // >= the exact sum
+            travel_x_[i] = p_.x[i];
+            travel_q_[i] = p_.q[i];
+        }
+    }
     if (elements_.size() < member_c_.size()) {
         elements_.resize(member_c_.size());
     }
