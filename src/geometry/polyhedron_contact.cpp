@@ -485,17 +485,8 @@ void face_separations(PlaneDistances& t, const std::vector<double>& bound, doubl
         return;
     }
     sep.assign(nf, -std::numeric_limits<double>::infinity());
-    // The first face of the largest bound, as std::max_element finds it, without a branch per
-    // face (the comparisons follow no pattern: its branches were a seventh of this function).
-    std::size_t first = 0;
-    {
-        double top = bound[0];
-        for (std::size_t k = 1; k < nf; ++k) {
-            const bool up = top < bound[k];
-            top = up ? bound[k] : top;
-            first = up ? k : first;
-        }
-    }
+    const auto first =
+        static_cast<std::size_t>(std::max_element(bound.begin(), bound.end()) - bound.begin());
     sep[first] = t.separation(first);
     double bar = std::max(floor, sep[first]);
     for (std::size_t k = 0; k < nf; ++k) {

@@ -69,35 +69,12 @@ class PlaneDistances {
         const std::size_t nv = v_.size();
         const std::size_t nf = nf_;
         double* col = t_.dist.data() + k;
-        // The smallest in four running minima (the smallest of a set does not depend on the order
-        // it is taken in): one chain of dependent minima, one per vertex, was the loop's
-        // critical path for bodies of many vertices (`cylinder_16`: 32).
-        constexpr double highest = std::numeric_limits<double>::infinity();
-        double s0 = highest;
-        double s1 = highest;
-        double s2 = highest;
-        double s3 = highest;
-        std::size_t i = 0;
-        for (; i + 4 <= nv; i += 4) {
-            const double d0 = n.dot(v[i]) - o;
-            const double d1 = n.dot(v[i + 1]) - o;
-            const double d2 = n.dot(v[i + 2]) - o;
-            const double d3 = n.dot(v[i + 3]) - o;
-            col[i * nf] = d0;
-            col[(i + 1) * nf] = d1;
-            col[(i + 2) * nf] = d2;
-            col[(i + 3) * nf] = d3;
-            s0 = std::min(s0, d0);
-            s1 = std::min(s1, d1);
-            s2 = std::min(s2, d2);
-            s3 = std::min(s3, d3);
-        }
-        for (; i < nv; ++i) {
+        double s = std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; i < nv; ++i) {
             const double d = n.dot(v[i]) - o;
             col[i * nf] = d;
-            s0 = std::min(s0, d);
+            s = std::min(s, d);
         }
-        const double s = std::min(std::min(s0, s1), std::min(s2, s3));
         if (t_.col_done[k] == 0) {
             t_.col_done[k] = 1;
             t_.cols.push_back(k);
