@@ -250,27 +250,11 @@ void near_support(const geometry::PosedPolyhedron& p, const Vec3& d, double over
     out.clear();
     // In the body frame (d . x = d . p.x + d_body . v): one rotation of d instead of one per
     // vertex; only the vertices in the band are turned to the world frame.
-    // The largest height in four running maxima (the largest of a set does not depend on the
-    // order it is taken in; one chain of dependent maxima was the function's hottest line).
     const Vec3 db = p.q.conjugate() * d;
-    const std::vector<Vec3>& vs = p.shape->vertices;
-    constexpr double lowest = -std::numeric_limits<double>::infinity();
-    double h0 = lowest;
-    double h1 = lowest;
-    double h2 = lowest;
-    double h3 = lowest;
-    const std::size_t n = vs.size();
-    std::size_t i = 0;
-    for (; i + 4 <= n; i += 4) {
-        h0 = std::max(h0, db.dot(vs[i]));
-        h1 = std::max(h1, db.dot(vs[i + 1]));
-        h2 = std::max(h2, db.dot(vs[i + 2]));
-        h3 = std::max(h3, db.dot(vs[i + 3]));
+    double top = -std::numeric_limits<double>::infinity();
+    for (const Vec3& v : p.shape->vertices) {
+        top = std::max(top, db.dot(v));
     }
-    for (; i < n; ++i) {
-        h0 = std::max(h0, db.dot(vs[i]));
-    }
-    const double top = std::max(std::max(h0, h1), std::max(h2, h3));
     const double band = kTieBand * overlap;
     for (const Vec3& v : p.shape->vertices) {
         // below < band exactly when the rounded 1 - below / band is positive (band > 0: a
