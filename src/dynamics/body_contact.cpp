@@ -570,6 +570,9 @@ ElementContact polyhedron_wall(const Element& a, const WallShape& w) {
     const geometry::PosedPolyhedron p{a.poly, a.centre, a.q};
     wall_deepest([&](const Vec3& d) { return p.support(d); }, a, w, out);
     if (!(out.overlap > 0.0)) {
+        if (std::holds_alternative<PlaneWall>(w) && out.overlap <= 0.0) {
+            out.wall_gap = -out.overlap; // the deepest vertex's height: exact to round-off
+        }
         out.overlap = 0.0;
         return out;
     }

@@ -76,6 +76,9 @@ struct ElementContact {
     Vec3 point = Vec3::Zero();   ///< contact point (m)
     double r_eff = 0.0;          ///< effective radius for the law (m), clamped (see .cpp)
     bool proved_apart = false;   ///< apart by the cached or searched direction (no narrow phase)
+    /// A polyhedron apart from a plane wall: the height (m, >= 0) of its deepest vertex above the
+    /// wall, as computed (0 otherwise).
+    double wall_gap = 0.0;
 };
 
 /// Narrow-phase counters of a run (summed over the steps).

@@ -293,11 +293,30 @@ void System::index_bodies() {
     }
     if (!has_bodies_) {
         sep_dirs_.clear();
+        sep_proofs_.clear();
+        apart_below_.clear();
         return;
     }
     const auto& nb = nl_.partners();
     const auto& owner = nl_.owners();
-    sep_dirs_.assign(nb.size(), Vec3::Zero()); // the entries changed: no cached direction
+    sep_dirs_.assign(nb.size(), Vec3::Zero());        // the entries changed: no cached direction
+    sep_proofs_.assign(nb.size(), SeparationProof{}); // nor a proof along one
+    // A memory is checked against the pair's shapes and relative pose before it is read, so the
+    // entries keep theirs (and their storage): a memory of another pair is refilled.
+    plane_memos_.resize(nb.size());
+    apart_below_.assign(nb.size(), -std::numeric_limits<double>::infinity());
+    travel_.assign(p_.size(), 0.0); // every bound read against it goes too
+    std::fill(wall_apart_below_.begin(), wall_apart_below_.end(),
+              -std::numeric_limits<double>::infinity());
+    travel_x_ = p_.x;
+    travel_r_.assign(p_.size(), 0.0);
+    for (const std::uint32_t i : bodies_) {
+        const auto s = static_cast<std::size_t>(p_.shape[i]);
+        if (s < poly_features_.size() && !poly_features_[s].edges.empty()) {
+            travel_r_[i] = poly_features_[s].radius;
+        }
+    }
+    travel_q_ = p_.q;
     for (std::size_t k = 0; k < nb.size(); ++k) {
         if (p_.shape[owner[k]] >= 0 || p_.shape[nb[k]] >= 0) {
             body_entries_.push_back(static_cast<std::uint32_t>(k));
@@ -442,6 +461,7 @@ void System::find_wall_candidates() {
         }
         body_wall_offsets_[b + 1] = static_cast<std::uint32_t>(body_walls_.size());
     }
+    wall_apart_below_.assign(body_walls_.size(), -std::numeric_limits<double>::infinity());
 }
 
 void System::refresh() {

@@ -347,15 +347,16 @@ class System {
     // Per list entry of two single polyhedra: the memory of its last common-plane search, read
     // when the pair touched at the last step (element_contact's `memo`). It depends on the two
     // shapes and their relative pose only, so it needs no reset at a list build or restart (a
-    // memory from another pose is refilled); the answers do not depend on it.
+    // memory from another pose is refilled); sized with sep_dirs_ at the list build (index_bodies).
+    // The answers do not depend on it.
     std::vector<geometry::PlaneMemo> plane_memos_;
     bool plane_memo_ = true;
     // Per list entry of two single polyhedra whose cached direction proved them apart: the pose
     // of that proof (overlap along the direction, the direction's component of the centres'
     // difference, both orientations), from which a later step bounds the overlap without the
     // vertex scan (body_forces, general_entry). Valid only until the entry's direction changes:
-    // cleared whenever the entry takes the full route (a list build zeroes the directions, which
-    // only the full route sets again, so no reset is needed). The answers do not depend on it.
+    // cleared whenever the entry takes the full route, and at every list build (beside
+    // sep_dirs_). The answers do not depend on it.
     struct SeparationProof {
         bool valid = false;
         double overlap = 0.0; // overlap along the direction at the proof (m, < 0)
@@ -364,6 +365,25 @@ class System {
         Quat qb = Quat::Identity();
     };
     std::vector<SeparationProof> sep_proofs_;
+    // Near misses skipped for several steps (body_forces): travel_[i] bounds how far any point of
+    // polyhedron body i has moved since the last list build (m; the centre's step plus the
+    // bounding radius times the change of the rotation, |R - R0| <= 2 min |q -+ q0|, in 1-norms,
+    // summed step by step and rounded upwards), brought up to the pose (travel_x_, travel_q_) at
+    // every posing. apart_below_[k]: when entry k's proof holds, the overlap along its direction
+    // stays below minus twice the margin while travel_[a] + travel_[b] stays below this (m;
+    // -infinity: no such bound); the first pass then counts the entry as proved apart without
+    // visiting it. Reset at every list build, cleared with the proof.
+    std::vector<double> travel_;
+    std::vector<double> travel_r_; // per particle: a polyhedron's bounding radius, else 0 (m)
+    std::vector<Vec3> travel_x_;
+    std::vector<Quat> travel_q_;
+    std::vector<double> apart_below_;
+    std::vector<std::uint32_t> skipped_; // this step's skipped near misses (scratch)
+    // Per body-wall candidate (body_walls_): for a single polyhedron apart from a plane wall, the
+    // travel_ of the body below which its deepest vertex stays above the wall by more than the
+    // margin (m; -infinity: none); body_forces then skips the query, whose answer is "apart" and
+    // leaves no record. Reset with body_walls_ (find_wall_candidates).
+    std::vector<double> wall_apart_below_;
     bool convex_blocks_ = true; // see use_convex_blocks
     long separation_skips_ = 0;
     // Compact histories, parallel to member_pairs_ (docs/architecture.md, "Contact records"): the

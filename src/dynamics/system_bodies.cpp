@@ -318,6 +318,21 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
         }
     }
     element_begin_[p_.size()] = static_cast<std::uint32_t>(member_c_.size());
+    // travel_ brought up to this pose (system.hpp), in a loop of its own over the bodies (inside
+    // the posing loop above its chain of operations waited on that loop's branches). Only
+    // polyhedra read it: travel_r_ is 0 for the other bodies.
+    if (travel_.size() == p_.size()) {
+        for (const std::uint32_t i : bodies_) {
+            const Vec3 dx = p_.x[i] - travel_x_[i];
+            const double minus = (p_.q[i].coeffs() - travel_q_[i].coeffs()).lpNorm<1>();
+            const double plus = (p_.q[i].coeffs() + travel_q_[i].coeffs()).lpNorm<1>();
+            const double step =
+                (dx.lpNorm<1>() + 2.0 * travel_r_[i] * std::min(minus, plus)) * (1.0 + 1e-9);
+            travel_[i] = (travel_[i] + step) * (1.0 + 1e-15); // >= the exact sum
+            travel_x_[i] = p_.x[i];
+            travel_q_[i] = p_.q[i];
+        }
+    }
     if (elements_.size() < member_c_.size()) {
         elements_.resize(member_c_.size());
     }
@@ -692,12 +707,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // ordered): bounding spheres, the elements of each that reach the other, then every
             // element pair through the narrow phase (sphere pairs through the queue).
             std::vector<std::uint32_t> near_b;
-            if (plane_memos_.size() < sep_dirs_.size()) {
-                plane_memos_.resize(sep_dirs_.size());
-            }
-            if (sep_proofs_.size() < sep_dirs_.size()) {
-                sep_proofs_.resize(sep_dirs_.size());
-            }
             const auto general_entry = [&](std::uint32_t k, std::uint32_t a, std::uint32_t b) {
                 const double rsum = p_.radius[a] + p_.radius[b];
                 if ((p_.x[a] - p_.x[b]).squaredNorm() >= rsum * rsum) {
@@ -757,6 +766,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                                 if (bound < -margin) {
                                     ++np_.calls; // the counts of element_contact's answer
                                     ++separation_skips_;
+                                    apart_below_[k] =
+                                        travel_[a] + travel_[b] - bound - 2.0 * margin;
                                     return;
                                 }
                             }
@@ -765,14 +776,14 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                                 proof = {true, overlap, along, A.q, B.q};
                                 ++np_.calls;
                                 ++separation_skips_;
+                                apart_below_[k] = travel_[a] + travel_[b] - overlap - 2.0 * margin;
                                 return;
                             }
                         }
                     }
                 }
-                if (k < sep_proofs_.size()) {
-                    sep_proofs_[k].valid = false; // the full route may change the direction
-                }
+                sep_proofs_[k].valid = false; // the full route may change the direction
+                apart_below_[k] = -std::numeric_limits<double>::infinity();
                 // Elements of b that reach into a's bounding sphere (a clump pair touches with a
                 // few of its members: 12 x 12 candidate pairs become about 2 x 2).
                 near_b.clear();
@@ -897,15 +908,25 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // radii widened by 1e-9 of it: general_entry's own test (unchanged) decides, this one
             // only drops the entries it would return from at once (most polyhedron entries), so a
             // difference of round-off between the two expressions cannot drop a contact.
+            // A general hit whose near-miss bound still holds (apart_below_, a sound bound of
+            // the overlap along its cached direction below minus twice the margin, so the proof
+            // or the vertex scan in general_entry would answer "apart") is not visited: it goes to
+            // `skipped_`, where it is only counted as general_entry counts it.
             const std::size_t n_members = member_pairs_.size();
             member_hits_.resize(n_members);
+            skipped_.resize(n_members);
             std::size_t n_hits = 0;
+            std::size_t n_skipped = 0;
             {
                 const MemberPair* mp = member_pairs_.data();
                 const MemberSphere* c = member_c_.data();
                 const Vec3* x = p_.x.data();
                 const double* rad = p_.radius.data();
+                const double* travel = travel_.data();
+                const double* below = apart_below_.data();
+                const bool skips = separation_cache_ && !apart_below_.empty();
                 std::uint32_t* hits = member_hits_.data();
+                std::uint32_t* skipped = skipped_.data();
                 for (std::size_t i = 0; i < n_members; ++i) {
                     const bool general = mp[i].ea == no_element;
                     bool hit = false;
@@ -917,6 +938,13 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         const double d1 = pa.y() - pb.y();
                         const double d2 = pa.z() - pb.z();
                         hit = d0 * d0 + d1 * d1 + d2 * d2 < rs * rs;
+                        if (skips) {
+                            const bool skip =
+                                hit & (travel[mp[i].a] + travel[mp[i].b] < below[mp[i].k]);
+                            skipped[n_skipped] = static_cast<std::uint32_t>(i);
+                            n_skipped += static_cast<std::size_t>(skip);
+                            hit = hit & !skip;
+                        }
                     } else {
                         const MemberSphere& A = c[mp[i].ea];
                         const MemberSphere& B = c[mp[i].eb];
@@ -929,6 +957,17 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     }
                     hits[n_hits] = static_cast<std::uint32_t>(i);
                     n_hits += static_cast<std::size_t>(hit);
+                }
+            }
+            // The skipped near misses: the counts of general_entry's bounding-sphere tests (one
+            // test for two single polyhedra: each element's centre and radius are its body's) and
+            // of its proof (no contact at the last step: the bound is cleared by the full route).
+            for (std::size_t s = 0; s < n_skipped; ++s) {
+                const MemberPair& m = member_pairs_[skipped_[s]];
+                const double rsum = p_.radius[m.a] + p_.radius[m.b];
+                if ((p_.x[m.a] - p_.x[m.b]).squaredNorm() < rsum * rsum) {
+                    ++np_.calls;
+                    ++separation_skips_;
                 }
             }
             // The memories of the general items a few hits ahead are fetched into the cache
@@ -1038,8 +1077,18 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                             continue;
                         }
                         const Element& A = elements_[ea];
+                        // A single polyhedron whose deepest vertex was above this plane wall by
+                        // more than the margin: it is still, as long as the body has moved less
+                        // than that height since (travel_; the wall is at rest).
+                        const bool single = element_begin_[a + 1] - a0 == 1;
+                        if (single && travel_[a] < wall_apart_below_[c]) {
+                            continue;
+                        }
                         const ElementContact ec = element_wall_contact(A, ws);
                         if (!ec.touching) {
+                            if (single && A.kind == Element::Kind::polyhedron) {
+                                wall_apart_below_[c] = travel_[a] + ec.wall_gap - 1e-9 * A.radius;
+                            }
                             continue;
                         }
                         if (convex_blocks_) {

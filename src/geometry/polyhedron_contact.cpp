@@ -708,7 +708,9 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
     const PolyhedronFeatures& fa = *a.shape;
     const PolyhedronFeatures& fb = *b.shape;
     const double dist = (b.x - a.x).norm();
-    if (!std::isfinite(dist) || !std::isfinite(a.q.norm()) || !std::isfinite(b.q.norm())) {
+    // (A norm is finite exactly when its square is: Eigen's norm() is sqrt(squaredNorm()).)
+    if (!std::isfinite(dist) || !std::isfinite(a.q.squaredNorm()) ||
+        !std::isfinite(b.q.squaredNorm())) {
         c.converged = false;
         return c;
     }
