@@ -497,16 +497,16 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
 /// The sphere-wall contacts of System::wall_unit four at a time on the lanes of a register, with
 /// `variant` of the law (as contact_groups). Contact a is particle active[a] against wall
 /// wall_of[a] (wall material wall_material[wall]) with geometry geo[a] (world frame; the wall is
-/// body j, at rest, of infinite mass); histories in wall_shear[particle * nw + wall] (m). Forces
-/// and torques are added to the particles, energy (only `with_energy`) and max_ratio accumulate,
-/// contact by contact in order. A last group of fewer than four repeats its last contact in the
-/// free lanes, whose results are dropped (a copy of a lane does not change which branch the group
-/// takes, so the kept lanes get the same bits).
+/// body j, at rest, of infinite mass); histories in wall_shear[wall * stride + particle] (m).
+/// Forces and torques are added to the particles, energy (only `with_energy`) and max_ratio
+/// accumulate, contact by contact in order. A last group of fewer than four repeats its last
+/// contact in the free lanes, whose results are dropped (a copy of a lane does not change which
+/// branch the group takes, so the kept lanes get the same bits).
 template <unsigned variant, class Law, bool with_energy = true>
 void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
                  const int* wall_material, double fn_floor, double rolling, double dt,
                  const WallContact* geo, const std::uint32_t* active, const std::uint32_t* wall_of,
-                 std::size_t n, std::size_t nw, const PairArrays& arrays, Vec3* wall_shear,
+                 std::size_t n, std::size_t stride, const PairArrays& arrays, Vec3* wall_shear,
                  double& energy_sum, double& max_ratio_of) {
     constexpr int W = 4;
     // Local copies of what the loop reads through references: the intrinsics' stores may alias any
@@ -545,7 +545,7 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
         for (int l = 0; l < W; ++l) {
             as[l] = g + std::min<std::size_t>(static_cast<std::size_t>(l), m - 1);
             is[l] = active[as[l]];
-            hs[l] = static_cast<std::uint32_t>(is[l] * nw + wall_of[as[l]]);
+            hs[l] = static_cast<std::uint32_t>(wall_of[as[l]] * stride + is[l]);
             const WallContact& wc = geo[as[l]];
             for (int q = 0; q < 3; ++q) {
                 c.n[q][l] = wc.n[q];
@@ -621,13 +621,14 @@ template <class Law>
 void wall_contacts(const Law& law, const PairTable& pairs, const std::int32_t* material,
                    const int* wall_material, double fn_floor, double rolling, double dt,
                    const WallContact* geo, const std::uint32_t* active,
-                   const std::uint32_t* wall_of, std::size_t n, std::size_t nw, const PairArrays& a,
-                   Vec3* wall_shear, double& energy, double& max_ratio, bool with_energy) {
+                   const std::uint32_t* wall_of, std::size_t n, std::size_t stride,
+                   const PairArrays& a, Vec3* wall_shear, double& energy, double& max_ratio,
+                   bool with_energy) {
     with_cheapest_variant<contact::cap_when_sliding>(pairs, rolling, [&](auto variant) {
         with_flag(with_energy, [&](auto sum_energy) {
             wall_groups<decltype(variant)::value, Law, decltype(sum_energy)::value>(
                 law, pairs, material, wall_material, fn_floor, rolling, dt, geo, active, wall_of, n,
-                nw, a, wall_shear, energy, max_ratio);
+                stride, a, wall_shear, energy, max_ratio);
         });
     });
 }

@@ -114,7 +114,7 @@ std::size_t System::add_particle(int material, double radius, const Vec3& x, con
                                  const Vec3& omega) {
     const double rho = spec_.materials.at(static_cast<std::size_t>(material)).density;
     const std::size_t i = p_.add_sphere(next_id_++, material, radius, rho, x, v, omega);
-    wall_shear_.resize(p_.size() * spec_.walls.size(), Vec3::Zero());
+    grow_wall_histories();
     list_valid_ = false;
     return i;
 }
@@ -125,10 +125,27 @@ std::size_t System::add_body(int material, int shape, const Vec3& x, const Vec3&
     const double rho = spec_.materials.at(static_cast<std::size_t>(material)).density;
     const std::size_t i = p_.add_body(next_id_++, material, shape, t.bounding_radius(), t.mass(rho),
                                       t.inertia(rho), x, v, q, omega);
-    wall_shear_.resize(p_.size() * spec_.walls.size(), Vec3::Zero());
+    grow_wall_histories();
     has_bodies_ = true;
     list_valid_ = false;
     return i;
+}
+
+void System::grow_wall_histories() {
+    const std::size_t n = p_.size();
+    if (n <= wall_stride_) {
+        return;
+    }
+    const std::size_t nw = spec_.walls.size();
+    const std::size_t stride = std::max({n, 2 * wall_stride_, std::size_t{64}});
+    std::vector<Vec3> grown(nw * stride, Vec3::Zero());
+    for (std::size_t w = 0; w < nw; ++w) {
+        std::copy_n(wall_shear_.begin() + static_cast<std::ptrdiff_t>(w * wall_stride_),
+                    wall_stride_, grown.begin() + static_cast<std::ptrdiff_t>(w * stride));
+    }
+    wall_shear_.swap(grown);
+    wall_stride_ = stride;
+    wall_shear_spare_.clear(); // of the old size; carry_wall_histories sizes it again
 }
 
 Quat System::initial_orientation(const OrientationSpec& o) {
@@ -258,17 +275,18 @@ void System::carry_wall_histories(const std::vector<std::uint32_t>& order,
     for (std::size_t k = 0; k < n; ++k) {
         new_place_[order[k]] = static_cast<std::uint32_t>(k);
     }
-    wall_mark_.assign(n * nw, 0);
+    const std::size_t stride = wall_stride_;
+    wall_mark_.assign(nw * stride, 0);
     for (std::size_t w = 0; w < nw; ++w) {
         for (const std::uint32_t i : wall_candidates_[w]) {
-            wall_mark_[i * nw + w] = 1;
+            wall_mark_[w * stride + i] = 1;
         }
     }
     wall_shear_spare_.resize(wall_shear_.size(), Vec3::Zero());
     for (std::size_t w = 0; w < std::min(nw, old_candidates.size()); ++w) {
         for (const std::uint32_t i : old_candidates[w]) {
-            Vec3& s = wall_shear_[i * nw + w];
-            const std::size_t to = new_place_[i] * nw + w;
+            Vec3& s = wall_shear_[w * stride + i];
+            const std::size_t to = w * stride + new_place_[i];
             if (wall_mark_[to] != 0) {
                 wall_shear_spare_[to] = s;
             }
@@ -748,7 +766,7 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
             p_.omega.data(), p_.radius.data(), p_.mass.data(), p_.force.data(), p_.torque.data(),
             nullptr,         nullptr,          nullptr};
         simd::wall_contacts(law, pairs_, p_.material.data(), wall_material_.data(), fn_floor,
-                            rolling, dt, geo, active, wall_of, n_active, nw, arrays,
+                            rolling, dt, geo, active, wall_of, n_active, wall_stride_, arrays,
                             wall_shear_.data(), t.energy, t.max_ratio, form_energy_);
 #else
         // In blocks with the branch-free law.
@@ -766,7 +784,7 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
                 const std::uint32_t i = active[a0 + b];
                 const WallContact& g = geo[a0 + b];
                 const std::uint32_t w = wall_of[a0 + b];
-                const Vec3& s = wall_shear_[i * nw + w];
+                const Vec3& s = wall_shear_[w * wall_stride_ + i];
                 for (int q = 0; q < 3; ++q) {
                     c.n[q][b] = g.n[q];
                     c.v[q][b] = p_.v[i][q];
@@ -788,7 +806,8 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
                 const std::uint32_t i = active[a0 + b];
                 p_.force[i] += Vec3(c.f[0][b], c.f[1][b], c.f[2][b]);
                 p_.torque[i] += Vec3(c.ti[0][b], c.ti[1][b], c.ti[2][b]);
-                wall_shear_[i * nw + wall_of[a0 + b]] = Vec3(c.s[0][b], c.s[1][b], c.s[2][b]);
+                wall_shear_[wall_of[a0 + b] * wall_stride_ + i] =
+                    Vec3(c.s[0][b], c.s[1][b], c.s[2][b]);
                 t.energy += c.energy[b];
                 t.max_ratio = std::max(t.max_ratio, ratio[b]);
             }
@@ -833,7 +852,7 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
                     active[n_active] = i;
                     wall_of[n_active] = static_cast<std::uint32_t>(w);
                     n_active += touch ? 1U : 0U;
-                    keep_or_clear(wall_shear_[i * nw + w], touch);
+                    keep_or_clear(wall_shear_[w * wall_stride_ + i], touch);
                 }
             },
             spec_.walls[w].shape);
@@ -1514,7 +1533,14 @@ SystemState System::save_state() const {
     s.nl_x_build = nl_.positions_at_build();
     s.nl_ids = p_.id;
     s.nl_builds = nl_.builds();
-    s.wall_shear = wall_shear_;
+    // Particle by particle ([particle * n_walls + wall]), whatever the stride.
+    const std::size_t nw = spec_.walls.size();
+    s.wall_shear.assign(p_.size() * nw, Vec3::Zero());
+    for (std::size_t w = 0; w < nw; ++w) {
+        for (std::size_t i = 0; i < p_.size(); ++i) {
+            s.wall_shear[i * nw + w] = wall_shear_[w * wall_stride_ + i];
+        }
+    }
     s.time = time_;
     s.step = step_;
     s.next_id = next_id_;
@@ -1536,7 +1562,15 @@ void System::restore_state(SystemState s) {
     p_ = std::move(s.particles);
     nl_.restore(std::move(s.nl_offsets), std::move(s.nl_partners), std::move(s.nl_shear),
                 std::move(s.nl_x_build), std::move(s.nl_ids), s.nl_builds);
-    wall_shear_ = std::move(s.wall_shear);
+    const std::size_t nw = spec_.walls.size();
+    wall_stride_ = p_.size();
+    wall_shear_.assign(nw * wall_stride_, Vec3::Zero());
+    wall_shear_spare_.clear();
+    for (std::size_t w = 0; w < nw; ++w) {
+        for (std::size_t i = 0; i < wall_stride_; ++i) {
+            wall_shear_[w * wall_stride_ + i] = s.wall_shear[i * nw + w];
+        }
+    }
     time_ = s.time;
     step_ = s.step;
     next_id_ = s.next_id;

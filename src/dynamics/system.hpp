@@ -250,14 +250,23 @@ class System {
     /// to the particles' new places after the store was reordered (new k <- old order[k]).
     void carry_wall_histories(const std::vector<std::uint32_t>& order,
                               const std::vector<std::vector<std::uint32_t>>& old_candidates);
+    /// Makes room in wall_shear_ for every particle of the store (the stride at least doubles, so
+    /// that adding particles one by one moves each history a bounded number of times).
+    void grow_wall_histories();
 
     SceneSpec spec_;
     PairTable pairs_;
     ParticleStore p_;
     contact::NeighbourList nl_;
-    std::vector<Vec3> wall_shear_; // [particle * n_walls + wall]
+    // Wall histories, wall by wall: [wall * wall_stride_ + particle] (wall_stride_ >= the number
+    // of particles). A wall's candidates are in increasing particle order, and those of a plane
+    // wall are mostly runs of neighbouring indices (the store is sorted by cell), so the scan and
+    // the law read each wall's histories nearly in sequence (SystemState keeps them particle by
+    // particle).
+    std::vector<Vec3> wall_shear_;
+    std::size_t wall_stride_ = 0;
     // Scratch of carry_wall_histories: an all-zero array of wall_shear_'s size, the new place of
-    // each particle and a flag per (particle, wall) of the new candidates.
+    // each particle and a flag per (wall, particle) of the new candidates (wall_shear_'s layout).
     std::vector<Vec3> wall_shear_spare_;
     std::vector<std::uint32_t> new_place_;
     std::vector<std::uint8_t> wall_mark_;
