@@ -38,11 +38,47 @@ inline double squared_distance(const Vec3& a, const Vec3& b) {
 #endif
 }
 
+/// Byte offset of particle record i in a Vec3 array (ActiveList and InnerChunk hand the register
+/// path and the inner filter offsets instead of indices: an index takes an address computation
+/// (i + 2 i, then times 8) per array, an offset none). Offsets are 32-bit: fewer than 2^32 / 24
+/// particles (System::index_partners checks).
+constexpr std::uint32_t record_bytes = sizeof(Vec3);
+
+/// The record at byte offset `off` of a.
+inline const Vec3& at(const Vec3* a, std::uint32_t off) {
+    return *reinterpret_cast<const Vec3*>(reinterpret_cast<const char*>(a) + off);
+}
+/// The record at byte offset `off` of a.
+inline Vec3& at(Vec3* a, std::uint32_t off) {
+    return *reinterpret_cast<Vec3*>(reinterpret_cast<char*>(a) + off);
+}
+
 #ifdef __AVX2__
 /// Components x, y, z of four records, one register each (lane l = record l).
 struct Columns {
     __m256d c[3];
 };
+
+/// Reads the records at byte offsets off[0..3] of a and transposes them into columns.
+inline Columns columns_at(const Vec3* __restrict a, const std::uint32_t off[4]) {
+    const double* r0 = at(a, off[0]).data();
+    const double* r1 = at(a, off[1]).data();
+    const double* r2 = at(a, off[2]).data();
+    const double* r3 = at(a, off[3]).data();
+    const __m256d r02 =
+        _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(r0)), _mm_loadu_pd(r2), 1);
+    const __m256d r13 =
+        _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(r1)), _mm_loadu_pd(r3), 1);
+    const __m128d z01 = _mm_loadh_pd(_mm_load_sd(r0 + 2), r1 + 2);
+    const __m128d z23 = _mm_loadh_pd(_mm_load_sd(r2 + 2), r3 + 2);
+    return {{_mm256_unpacklo_pd(r02, r13), _mm256_unpackhi_pd(r02, r13),
+             _mm256_insertf128_pd(_mm256_castpd128_pd256(z01), z23, 1)}};
+}
+
+/// The four 32-bit indices of v as byte offsets of Vec3 records.
+inline __m128i offsets_of(__m128i v) {
+    return _mm_mullo_epi32(v, _mm_set1_epi32(static_cast<int>(record_bytes)));
+}
 
 /// Reads the records a[p[0..3]] and transposes them into columns.
 inline Columns columns(const Vec3* __restrict a, const std::uint32_t p[4]) {
@@ -100,11 +136,11 @@ inline void set(Vec3& a, __m128d xy, double z) {
 
 #ifdef __AVX2__
 /// The touching list entries of a chunk as the filters append them, with their particles, so that
-/// the register path reads the particles' indices from consecutive places.
+/// the register path reads the particles' records from consecutive places.
 struct ActiveList {
     std::uint32_t* k; ///< list entries
-    std::uint32_t* i; ///< their owners
-    std::uint32_t* j; ///< their partners
+    std::uint32_t* i; ///< their owners, as byte offsets of records (record_bytes times the index)
+    std::uint32_t* j; ///< their partners, as byte offsets of records
 };
 
 /// Appends the 32-bit lanes of v whose bit is set in the 4-bit mask m to out[0..), in lane order
@@ -150,12 +186,12 @@ struct PairArrays {
 /// pointers are at the chunk's part of the arrays (its first entry index for the entries, a quarter
 /// of it for `was`).
 struct InnerChunk {
-    std::uint32_t* k;    ///< list entries
-    std::uint32_t* i;    ///< their owners
-    std::uint32_t* j;    ///< their partners
-    double* rsum2;       ///< their (r_i + r_j)^2 (m^2)
-    std::uint8_t* was;   ///< per group of four inner entries, bit l: inner entry 4 g + l touched
-                         ///< at the last filter (the inner list's own `touched`)
+    std::uint32_t* k;  ///< list entries
+    std::uint32_t* i;  ///< their owners, as byte offsets of records (record_bytes times the index)
+    std::uint32_t* j;  ///< their partners, as byte offsets of records
+    double* rsum2;     ///< their (r_i + r_j)^2 (m^2)
+    std::uint8_t* was; ///< per group of four inner entries, bit l: inner entry 4 g + l touched
+                       ///< at the last filter (the inner list's own `touched`)
     const double* near2; ///< list entry -> (r_i + r_j + inner gap)^2 (m^2), read when building
     std::size_t count;   ///< inner entries of the chunk
 };
@@ -219,8 +255,10 @@ std::size_t touching_entries(const PairArrays& arrays, std::size_t begin, std::s
         append_lanes(active.k + n,
                      _mm_add_epi32(_mm_set1_epi32(static_cast<int>(k)), _mm_setr_epi32(0, 1, 2, 3)),
                      m);
-        append_lanes(active.i + n, _mm_loadu_si128(reinterpret_cast<const __m128i*>(is)), m);
-        append_lanes(active.j + n, _mm_loadu_si128(reinterpret_cast<const __m128i*>(js)), m);
+        append_lanes(active.i + n,
+                     offsets_of(_mm_loadu_si128(reinterpret_cast<const __m128i*>(is))), m);
+        append_lanes(active.j + n,
+                     offsets_of(_mm_loadu_si128(reinterpret_cast<const __m128i*>(js))), m);
         if constexpr (with_rows) {
             std::size_t r = n;
             for (unsigned l = 0; l < 4; ++l) {
@@ -235,8 +273,8 @@ std::size_t touching_entries(const PairArrays& arrays, std::size_t begin, std::s
             const unsigned mn = m | static_cast<unsigned>(_mm256_movemask_pd(near));
             for (unsigned l = 0; l < 4; ++l) {
                 out.k[c] = static_cast<std::uint32_t>(k + l);
-                out.i[c] = is[l];
-                out.j[c] = js[l];
+                out.i[c] = is[l] * record_bytes;
+                out.j[c] = js[l] * record_bytes;
                 out.rsum2[c] = a.rsum2[k + l];
                 out.was[c / 4] |= static_cast<std::uint8_t>(((m >> l) & 1U) << (c % 4));
                 c += (mn >> l) & 1U;
@@ -268,8 +306,8 @@ void inner_touching_entries(const PairArrays& arrays, const InnerChunk& chunk, s
     std::size_t n = n_active;
     std::size_t c = 0;
     for (; c + 4 <= in.count; c += 4) {
-        const Columns xi = columns(a.x, in.i + c);
-        const Columns xj = columns(a.x, in.j + c);
+        const Columns xi = columns_at(a.x, in.i + c);
+        const Columns xj = columns_at(a.x, in.j + c);
         const __m256d d0 = _mm256_sub_pd(xi.c[0], xj.c[0]);
         const __m256d d1 = _mm256_sub_pd(xi.c[1], xj.c[1]);
         const __m256d d2 = _mm256_sub_pd(xi.c[2], xj.c[2]);
@@ -305,7 +343,7 @@ void inner_touching_entries(const PairArrays& arrays, const InnerChunk& chunk, s
     }
     for (; c < in.count; ++c) {
         const std::uint32_t k = in.k[c];
-        const bool t = squared_distance(a.x[in.i[c]], a.x[in.j[c]]) < in.rsum2[c];
+        const bool t = squared_distance(at(a.x, in.i[c]), at(a.x, in.j[c])) < in.rsum2[c];
         if (!t) {
             a.shear[k].setZero();
         }
@@ -404,16 +442,19 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
             V mi{};
             V mj{};
             for (int l = 0; l < W; ++l) {
-                ri[l] = a.radius[is[l]];
-                rj[l] = a.radius[js[l]];
-                mi[l] = a.mass[is[l]];
-                mj[l] = a.mass[js[l]];
+                const std::uint32_t i = is[l] / record_bytes;
+                const std::uint32_t j = js[l] / record_bytes;
+                ri[l] = a.radius[i];
+                rj[l] = a.radius[j];
+                mi[l] = a.mass[i];
+                mj[l] = a.mass[j];
             }
             z = sizes(ri, rj, mi, mj);
         }
         if (!one_pair) {
             for (int l = 0; l < W; ++l) {
-                const PairProperties& pp = pairs.at(material[is[l]], material[js[l]]);
+                const PairProperties& pp =
+                    pairs.at(material[is[l] / record_bytes], material[js[l] / record_bytes]);
                 c.e_star[l] = pp.effective_modulus;
                 c.g_star[l] = pp.effective_shear;
                 c.beta[l] = pp.beta;
@@ -421,12 +462,12 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
                 c.mu_roll[l] = pp.rolling_friction;
             }
         }
-        const Columns xi = columns(a.x, is);
-        const Columns xj = columns(a.x, js);
-        const Columns vi = columns(a.vel, is);
-        const Columns vj = columns(a.vel, js);
-        const Columns wi = columns(a.omega, is);
-        const Columns wj = columns(a.omega, js);
+        const Columns xi = columns_at(a.x, is);
+        const Columns xj = columns_at(a.x, js);
+        const Columns vi = columns_at(a.vel, is);
+        const Columns vj = columns_at(a.vel, js);
+        const Columns wi = columns_at(a.omega, is);
+        const Columns wj = columns_at(a.omega, js);
         const Columns sh = columns(a.shear, ks);
         V d[3];
         for (int q = 0; q < 3; ++q) {
@@ -459,6 +500,15 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
         top = select(larger, overlap, top);
         bottom = select(larger, z.diameter, bottom);
         contact::evaluate_lanes<variant>(law, fn_floor, rolling, c, dt);
+        // The scatter reads the entries and offsets from the list again (L1): an empty asm that
+        // may read and write memory keeps GCC from holding the twelve of them in registers through
+        // the law, where they spilled others.
+        asm volatile("" ::: "memory");
+        for (int l = 0; l < W; ++l) {
+            ks[l] = active.k[g + l];
+            is[l] = active.i[g + l];
+            js[l] = active.j[g + l];
+        }
 
         const RowsXY f = rows_xy(c.f[0], c.f[1]);
         const RowsXY ti = rows_xy(c.ti[0], c.ti[1]);
@@ -466,10 +516,10 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
         const RowsXY s = rows_xy(c.s[0], c.s[1]);
         for (int l = 0; l < W; ++l) {
             if constexpr (direct) {
-                add_to(a.force[is[l]], f.r[l], c.f[2][l]);
-                sub_from(a.force[js[l]], f.r[l], c.f[2][l]);
-                add_to(a.torque[is[l]], ti.r[l], c.ti[2][l]);
-                add_to(a.torque[js[l]], tj.r[l], c.tj[2][l]);
+                add_to(at(a.force, is[l]), f.r[l], c.f[2][l]);
+                sub_from(at(a.force, js[l]), f.r[l], c.f[2][l]);
+                add_to(at(a.torque, is[l]), ti.r[l], c.ti[2][l]);
+                add_to(at(a.torque, js[l]), tj.r[l], c.tj[2][l]);
             } else {
                 double* r = a.rows + 9 * (first_row + g + l);
                 _mm_storeu_pd(r, f.r[l]);

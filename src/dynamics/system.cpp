@@ -324,6 +324,8 @@ void System::index_bodies() {
 }
 
 void System::index_partners() {
+    // The register path and the inner lists take particles as 32-bit byte offsets of records.
+    KILN_ASSERT(p_.size() < std::numeric_limits<std::uint32_t>::max() / simd::record_bytes);
     // For each particle, the list entries where it is the partner, in increasing entry order.
     const auto& nb = nl_.partners();
     as_partner_offsets_.assign(p_.size() + 1, 0);
@@ -570,8 +572,8 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
         }
         active[n_active] = static_cast<std::uint32_t>(k);
 #ifdef __AVX2__
-        active_i[n_active] = i;
-        active_j[n_active] = j;
+        active_i[n_active] = i * simd::record_bytes;
+        active_j[n_active] = j * simd::record_bytes;
 #endif
         if constexpr (!direct) {
             // Rows of a chunk are its touching entries in order, from the chunk's first row.
@@ -1011,8 +1013,8 @@ void System::loosen(const std::vector<std::uint32_t>& loose) {
             for (std::uint64_t bits = inner_bits_[word]; bits != 0; bits &= bits - 1) {
                 const std::size_t k = word * 64 + static_cast<std::size_t>(std::countr_zero(bits));
                 inner_k_[c] = static_cast<std::uint32_t>(k);
-                inner_i_[c] = owner[k];
-                inner_j_[c] = nb[k];
+                inner_i_[c] = owner[k] * simd::record_bytes;
+                inner_j_[c] = nb[k] * simd::record_bytes;
                 inner_rsum2_[c] = entry_rsum2_[k];
                 ++c;
             }
