@@ -364,10 +364,11 @@ void inner_touching_entries(const PairArrays& arrays, const InnerChunk& chunk, s
 /// registers, geometry and law (evaluate_lanes), then the results added to force/torque contact by
 /// contact in list order (`direct`, one thread) or written to rows[9 (first_row + a)] (several
 /// threads). Pair properties from `pairs` by the particles' `material`. Returns how many entries it
-/// took (a multiple of four); energy and max_ratio accumulate in entry order (the energy only
-/// `with_energy`: otherwise the law's elastic energy is not formed and energy_sum is left as it
-/// is). `variant` selects the law's contact::LaneVariant (without_rolling only when rolling is 0).
-template <unsigned variant, class Law, bool direct, bool uniform, bool with_energy = true>
+/// took (a multiple of four); energy and max_ratio accumulate in entry order, only
+/// `with_counters` (otherwise the law's elastic energy and the overlap ratios are not formed and
+/// energy_sum and max_ratio_of are left as they are). `variant` selects the law's
+/// contact::LaneVariant (without_rolling only when rolling is 0).
+template <unsigned variant, class Law, bool direct, bool uniform, bool with_counters = true>
 std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std::int32_t* material,
                               double fn_floor, double rolling, double dt, const PairArrays& arrays,
                               const ActiveList& list, std::size_t n, std::size_t first_row,
@@ -496,9 +497,11 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
         c.m_eff = z.m_eff;
         c.lever_i = z.ri - 0.5 * overlap;
         c.lever_j = z.rj - 0.5 * overlap;
-        const auto larger = overlap * bottom > top * z.diameter;
-        top = select(larger, overlap, top);
-        bottom = select(larger, z.diameter, bottom);
+        if constexpr (with_counters) {
+            const auto larger = overlap * bottom > top * z.diameter;
+            top = select(larger, overlap, top);
+            bottom = select(larger, z.diameter, bottom);
+        }
         contact::evaluate_lanes<variant>(law, fn_floor, rolling, c, dt);
         // The scatter reads the entries and offsets from the list again (L1): an empty asm that
         // may read and write memory keeps GCC from holding the twelve of them in registers through
@@ -530,13 +533,15 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
                 r[8] = c.tj[2][l];
             }
             set(a.shear[ks[l]], s.r[l], c.s[2][l]);
-            if constexpr (with_energy) {
+            if constexpr (with_counters) {
                 energy += c.energy[l];
             }
         }
     }
-    for (int l = 0; l < W; ++l) {
-        max_ratio = std::max(max_ratio, top[l] / bottom[l]);
+    if constexpr (with_counters) {
+        for (int l = 0; l < W; ++l) {
+            max_ratio = std::max(max_ratio, top[l] / bottom[l]);
+        }
     }
     energy_sum = energy;
     max_ratio_of = max_ratio;
@@ -548,11 +553,11 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
 /// `variant` of the law (as contact_groups). Contact a is particle active[a] against wall
 /// wall_of[a] (wall material wall_material[wall]) with geometry geo[a] (world frame; the wall is
 /// body j, at rest, of infinite mass); histories in wall_shear[wall * stride + particle] (m).
-/// Forces and torques are added to the particles, energy (only `with_energy`) and max_ratio
-/// accumulate, contact by contact in order. A last group of fewer than four repeats its last
+/// Forces and torques are added to the particles; energy and max_ratio accumulate, contact by
+/// contact in order, only `with_counters`. A last group of fewer than four repeats its last
 /// contact in the free lanes, whose results are dropped (a copy of a lane does not change which
 /// branch the group takes, so the kept lanes get the same bits).
-template <unsigned variant, class Law, bool with_energy = true>
+template <unsigned variant, class Law, bool with_counters = true>
 void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
                  const int* wall_material, double fn_floor, double rolling, double dt,
                  const WallContact* geo, const std::uint32_t* active, const std::uint32_t* wall_of,
@@ -618,7 +623,10 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
             c.s[q] = sh.c[q];
         }
         contact::evaluate_lanes<variant>(law, fn_floor, rolling, c, dt);
-        const V ratio = c.overlap / (2.0 * radius); // one division for the four lanes
+        V ratio{};
+        if constexpr (with_counters) {
+            ratio = c.overlap / (2.0 * radius); // one division for the four lanes
+        }
         const RowsXY f = rows_xy(c.f[0], c.f[1]);
         const RowsXY ti = rows_xy(c.ti[0], c.ti[1]);
         const RowsXY s = rows_xy(c.s[0], c.s[1]);
@@ -626,10 +634,10 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
             add_to(a.force[is[l]], f.r[l], c.f[2][l]);
             add_to(a.torque[is[l]], ti.r[l], c.ti[2][l]);
             set(wall_shear[hs[l]], s.r[l], c.s[2][l]);
-            if constexpr (with_energy) {
+            if constexpr (with_counters) {
                 energy += c.energy[l];
+                max_ratio = std::max(max_ratio, ratio[l]);
             }
-            max_ratio = std::max(max_ratio, ratio[l]);
         }
     }
     energy_sum = energy;
@@ -665,18 +673,18 @@ template <class Run> decltype(auto) with_flag(bool on, Run&& run) {
 }
 
 /// wall_groups with the cheapest variant of the law (with_cheapest_variant; the walls give no
-/// centre difference, so the history is projected with n). The elastic energy is summed only
-/// `with_energy`.
+/// centre difference, so the history is projected with n). The elastic energy and the overlap
+/// ratios are summed only `with_counters`.
 template <class Law>
 void wall_contacts(const Law& law, const PairTable& pairs, const std::int32_t* material,
                    const int* wall_material, double fn_floor, double rolling, double dt,
                    const WallContact* geo, const std::uint32_t* active,
                    const std::uint32_t* wall_of, std::size_t n, std::size_t stride,
                    const PairArrays& a, Vec3* wall_shear, double& energy, double& max_ratio,
-                   bool with_energy) {
+                   bool with_counters) {
     with_cheapest_variant<contact::cap_when_sliding>(pairs, rolling, [&](auto variant) {
-        with_flag(with_energy, [&](auto sum_energy) {
-            wall_groups<decltype(variant)::value, Law, decltype(sum_energy)::value>(
+        with_flag(with_counters, [&](auto sum_counters) {
+            wall_groups<decltype(variant)::value, Law, decltype(sum_counters)::value>(
                 law, pairs, material, wall_material, fn_floor, rolling, dt, geo, active, wall_of, n,
                 stride, a, wall_shear, energy, max_ratio);
         });
@@ -685,18 +693,18 @@ void wall_contacts(const Law& law, const PairTable& pairs, const std::int32_t* m
 
 /// contact_groups_as with the cheapest variant of the law (with_cheapest_variant), the history
 /// projected with the centre difference; R* and m* taken once when a.same_radius is set; the
-/// elastic energy summed only `with_energy`.
+/// elastic energy and the overlap ratios summed only `with_counters`.
 template <class Law, bool direct>
 std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
                            double fn_floor, double rolling, double dt, const PairArrays& a,
                            const ActiveList& active, std::size_t n, std::size_t first_row,
-                           double& energy, double& max_ratio, bool with_energy) {
+                           double& energy, double& max_ratio, bool with_counters) {
     constexpr unsigned base = contact::cap_when_sliding | contact::project_by_distance;
     return with_cheapest_variant<base>(pairs, rolling, [&](auto variant) {
         return with_flag(a.same_radius > 0.0, [&](auto uniform) {
-            return with_flag(with_energy, [&](auto sum_energy) {
+            return with_flag(with_counters, [&](auto sum_counters) {
                 return contact_groups_as<decltype(variant)::value, Law, direct,
-                                         decltype(uniform)::value, decltype(sum_energy)::value>(
+                                         decltype(uniform)::value, decltype(sum_counters)::value>(
                     law, pairs, material, fn_floor, rolling, dt, a, active, n, first_row, energy,
                     max_ratio);
             });

@@ -466,7 +466,7 @@ void System::find_wall_candidates() {
 
 void System::refresh() {
     rebuild_neighbours();
-    form_energy_ = true;
+    form_counters_ = true;
     compute_forces();
 }
 
@@ -641,7 +641,7 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
 #ifdef __AVX2__
     a_first = simd::contact_groups<Law, direct>(law, pairs_, p_.material.data(), fn_floor, rolling,
                                                 dt, arrays, act, n_active, begin, energy, max_ratio,
-                                                form_energy_);
+                                                form_counters_);
 #endif
     for (std::size_t a0 = a_first; a0 < n_active; a0 += block) {
         const std::size_t m = std::min(block, n_active - a0);
@@ -769,7 +769,7 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
             nullptr,         nullptr,          nullptr};
         simd::wall_contacts(law, pairs_, p_.material.data(), wall_material_.data(), fn_floor,
                             rolling, dt, geo, active, wall_of, n_active, wall_stride_, arrays,
-                            wall_shear_.data(), t.energy, t.max_ratio, form_energy_);
+                            wall_shear_.data(), t.energy, t.max_ratio, form_counters_);
 #else
         // In blocks with the branch-free law.
         contact::ContactBlock<block> c;
@@ -1385,7 +1385,7 @@ bool System::begin_step(int kicks) {
 
 void System::step() {
     const bool cleared = begin_step(1);
-    form_energy_ = true;
+    form_counters_ = true;
     compute_forces(true, cleared);
     ++step_;
     time_ = static_cast<double>(step_) * spec_.time_step;
@@ -1404,15 +1404,15 @@ void System::advance(long steps) {
     for (long s = 0; s < steps; ++s) {
         const bool last = s + 1 == steps;
         // The second half kick of every step but the last waits for the next step's pass. The
-        // counters of the steps before the last cannot be read: their elastic energy (the
-        // spheres') is not formed (use_energy_on_demand).
+        // counters of the steps before the last cannot be read: the spheres' elastic energy and
+        // largest overlap ratio are not formed (use_energy_on_demand).
         const bool cleared = begin_step(s == 0 ? 1 : 2);
-        form_energy_ = last || !energy_on_demand_;
+        form_counters_ = last || !energy_on_demand_;
         compute_forces(last, cleared);
         ++step_;
         time_ = static_cast<double>(step_) * spec_.time_step;
     }
-    form_energy_ = true;
+    form_counters_ = true;
 }
 
 void System::collect_contacts(std::vector<ContactRecord>& out) const {

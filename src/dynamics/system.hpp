@@ -191,10 +191,11 @@ class System {
         use_inner_ = on;
         inner_valid_ = false;
     }
-    /// Lets advance() form the elastic energy of the sphere contacts (pairs and walls) only at its
-    /// last step, the one whose counters() and energies() can be read (on, the default), or at
-    /// every step (off). Positions, velocities, forces and the counters read after a step(),
-    /// advance() or refresh() are the same bits either way (tests, A/B).
+    /// Lets advance() form the elastic energy and the largest overlap ratio of the sphere contacts
+    /// (pairs and walls) only at its last step, the one whose counters() and energies() can be
+    /// read (on, the default), or at every step (off). Positions, velocities, forces and the
+    /// counters read after a step(), advance() or refresh() are the same bits either way (tests,
+    /// A/B).
     void use_energy_on_demand(bool on) { energy_on_demand_ = on; }
     /// Lets the register path of the sphere pairs take R* and m* once when every particle has the
     /// same radius and mass (on, the default; from the next list build) or per contact (off, at
@@ -314,7 +315,7 @@ class System {
     bool use_inner_ = true;        // use_inner_list()
     bool use_uniform_ = true;      // use_uniform_sizes()
     bool energy_on_demand_ = true; // use_energy_on_demand()
-    bool form_energy_ = true;      // the next force evaluation sums the elastic energy
+    bool form_counters_ = true;    // the next force evaluation forms the energy and overlap ratio
     std::size_t inner_loose_ = 0;  // loose particles since the inner build
     long inner_next_build_ = 0;    // no inner build before this step (after dropping them)
     static constexpr long inner_holdoff = 200;              // steps
