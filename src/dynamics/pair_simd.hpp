@@ -556,13 +556,16 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
 /// Forces and torques are added to the particles; energy and max_ratio accumulate, contact by
 /// contact in order, only `with_counters`. A last group of fewer than four repeats its last
 /// contact in the free lanes, whose results are dropped (a copy of a lane does not change which
-/// branch the group takes, so the kept lanes get the same bits).
-template <unsigned variant, class Law, bool with_counters = true>
+/// branch the group takes, so the kept lanes get the same bits). With `uniform`, every particle
+/// has the radius a.same_radius and the mass a.same_mass (taken once instead of per lane).
+template <unsigned variant, class Law, bool uniform, bool with_counters = true>
 void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
                  const int* wall_material, double fn_floor, double rolling, double dt,
                  const WallContact* geo, const std::uint32_t* active, const std::uint32_t* wall_of,
                  std::size_t n, std::size_t stride, const PairArrays& arrays, Vec3* wall_shear,
                  double& energy_sum, double& max_ratio_of) {
+    // A contact's normal and overlap are read as four consecutive doubles.
+    static_assert(sizeof(WallContact) == 5 * sizeof(double), "WallContact is n, overlap, r_eff");
     constexpr int W = 4;
     // Local copies of what the loop reads through references: the intrinsics' stores may alias any
     // memory, so GCC would load the pointers again after each of them (the same operations).
@@ -570,11 +573,12 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
     double energy = energy_sum;
     double max_ratio = max_ratio_of;
     using V = contact::lanes::V4;
+    using contact::lanes::splat;
     contact::ContactLanes<V> c{};
     for (int q = 0; q < 3; ++q) {
-        c.wj[q] = contact::lanes::splat(0.0, c.e_star);
+        c.wj[q] = splat(0.0, c.e_star);
     }
-    c.lever_j = contact::lanes::splat(0.0, c.e_star);
+    c.lever_j = splat(0.0, c.e_star);
     const bool one_pair = pairs.size() == 1;
     const auto set_lane = [&c](int l, const PairProperties& pp) {
         c.e_star[l] = pp.effective_modulus;
@@ -592,6 +596,10 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
         }
     }
     V radius{}; // the lanes' particle radii (m)
+    if constexpr (uniform) {
+        radius = splat(a.same_radius, radius);
+        c.m_eff = splat(a.same_mass, radius);
+    }
     for (std::size_t g = 0; g < n; g += W) {
         const std::size_t m = std::min<std::size_t>(W, n - g);
         std::uint32_t is[W];
@@ -601,16 +609,32 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
             as[l] = g + std::min<std::size_t>(static_cast<std::size_t>(l), m - 1);
             is[l] = active[as[l]];
             hs[l] = static_cast<std::uint32_t>(wall_of[as[l]] * stride + is[l]);
-            const WallContact& wc = geo[as[l]];
-            for (int q = 0; q < 3; ++q) {
-                c.n[q][l] = wc.n[q];
+        }
+        // (n0, n1, n2, overlap) of the four contacts, transposed into columns.
+        const auto row = [&](int l) { return _mm256_loadu_pd(geo[as[l]].n.data()); };
+        const __m256d g0 = row(0);
+        const __m256d g1 = row(1);
+        const __m256d g2 = row(2);
+        const __m256d g3 = row(3);
+        const __m256d lo01 = _mm256_unpacklo_pd(g0, g1); // n0 n0 | n2 n2 of lanes 0, 1
+        const __m256d hi01 = _mm256_unpackhi_pd(g0, g1); // n1 n1 | overlap overlap
+        const __m256d lo23 = _mm256_unpacklo_pd(g2, g3);
+        const __m256d hi23 = _mm256_unpackhi_pd(g2, g3);
+        c.n[0] = _mm256_permute2f128_pd(lo01, lo23, 0x20);
+        c.n[1] = _mm256_permute2f128_pd(hi01, hi23, 0x20);
+        c.n[2] = _mm256_permute2f128_pd(lo01, lo23, 0x31);
+        c.overlap = _mm256_permute2f128_pd(hi01, hi23, 0x31);
+        c.r_eff =
+            _mm256_setr_pd(geo[as[0]].r_eff, geo[as[1]].r_eff, geo[as[2]].r_eff, geo[as[3]].r_eff);
+        if constexpr (!uniform) {
+            for (int l = 0; l < W; ++l) {
+                c.m_eff[l] = a.mass[is[l]];
+                radius[l] = a.radius[is[l]];
             }
-            c.overlap[l] = wc.overlap;
-            c.r_eff[l] = wc.r_eff;
-            c.m_eff[l] = a.mass[is[l]];
-            radius[l] = a.radius[is[l]];
-            c.lever_i[l] = radius[l] - wc.overlap;
-            if (!one_pair) {
+        }
+        c.lever_i = radius - c.overlap;
+        if (!one_pair) {
+            for (int l = 0; l < W; ++l) {
                 set_lane(l, pairs.at(material[is[l]], wall_material[wall_of[as[l]]]));
             }
         }
@@ -683,10 +707,13 @@ void wall_contacts(const Law& law, const PairTable& pairs, const std::int32_t* m
                    const PairArrays& a, Vec3* wall_shear, double& energy, double& max_ratio,
                    bool with_counters) {
     with_cheapest_variant<contact::cap_when_sliding>(pairs, rolling, [&](auto variant) {
-        with_flag(with_counters, [&](auto sum_counters) {
-            wall_groups<decltype(variant)::value, Law, decltype(sum_counters)::value>(
-                law, pairs, material, wall_material, fn_floor, rolling, dt, geo, active, wall_of, n,
-                stride, a, wall_shear, energy, max_ratio);
+        with_flag(a.same_radius > 0.0, [&](auto uniform) {
+            with_flag(with_counters, [&](auto sum_counters) {
+                wall_groups<decltype(variant)::value, Law, decltype(uniform)::value,
+                            decltype(sum_counters)::value>(
+                    law, pairs, material, wall_material, fn_floor, rolling, dt, geo, active,
+                    wall_of, n, stride, a, wall_shear, energy, max_ratio);
+            });
         });
     });
 }

@@ -766,7 +766,7 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
         const simd::PairArrays arrays{
             nullptr,         nullptr,          nullptr,        p_.x.data(),     p_.v.data(),
             p_.omega.data(), p_.radius.data(), p_.mass.data(), p_.force.data(), p_.torque.data(),
-            nullptr,         nullptr,          nullptr};
+            nullptr,         nullptr,          nullptr,        same_radius_,    same_mass_};
         simd::wall_contacts(law, pairs_, p_.material.data(), wall_material_.data(), fn_floor,
                             rolling, dt, geo, active, wall_of, n_active, wall_stride_, arrays,
                             wall_shear_.data(), t.energy, t.max_ratio, form_counters_);
