@@ -138,7 +138,7 @@ inline void set(Vec3& a, __m128d xy, double z) {
 /// The touching list entries of a chunk as the filters append them, with their particles, so that
 /// the register path reads the particles' records from consecutive places.
 struct ActiveList {
-    std::uint32_t* k; ///< list entries
+    std::uint32_t* k; ///< list entries, as byte offsets of their histories (record_bytes times k)
     std::uint32_t* i; ///< their owners, as byte offsets of records (record_bytes times the index)
     std::uint32_t* j; ///< their partners, as byte offsets of records
 };
@@ -252,8 +252,10 @@ std::size_t touching_entries(const PairArrays& arrays, std::size_t begin, std::s
         was = static_cast<std::uint8_t>(m);
         // The touching entries and their particles appended with one shuffle each (n + 3 stays
         // within the chunk: n counts touching entries before k).
+        constexpr int rb = static_cast<int>(record_bytes);
         append_lanes(active.k + n,
-                     _mm_add_epi32(_mm_set1_epi32(static_cast<int>(k)), _mm_setr_epi32(0, 1, 2, 3)),
+                     _mm_add_epi32(_mm_set1_epi32(static_cast<int>(k * record_bytes)),
+                                   _mm_setr_epi32(0, rb, 2 * rb, 3 * rb)),
                      m);
         append_lanes(active.i + n,
                      offsets_of(_mm_loadu_si128(reinterpret_cast<const __m128i*>(is))), m);
@@ -328,7 +330,7 @@ void inner_touching_entries(const PairArrays& arrays, const InnerChunk& chunk, s
         const auto lanes = [&](const std::uint32_t* p) {
             return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + c));
         };
-        append_lanes(active.k + n, lanes(in.k), m);
+        append_lanes(active.k + n, offsets_of(lanes(in.k)), m);
         append_lanes(active.i + n, lanes(in.i), m);
         append_lanes(active.j + n, lanes(in.j), m);
         if constexpr (with_rows) {
@@ -347,7 +349,7 @@ void inner_touching_entries(const PairArrays& arrays, const InnerChunk& chunk, s
         if (!t) {
             a.shear[k].setZero();
         }
-        active.k[n] = k;
+        active.k[n] = k * record_bytes;
         active.i[n] = in.i[c];
         active.j[n] = in.j[c];
         if constexpr (with_rows) {
@@ -359,14 +361,14 @@ void inner_touching_entries(const PairArrays& arrays, const InnerChunk& chunk, s
 }
 #endif
 
-/// The touching list entries active.k[0..n) of a chunk (their particles as the filter appended
-/// them), four at a time with the law on the four lanes of a register (AVX2): records transposed in
-/// registers, geometry and law (evaluate_lanes), then the results added to force/torque contact by
-/// contact in list order (`direct`, one thread) or written to rows[9 (first_row + a)] (several
-/// threads). Pair properties from `pairs` by the particles' `material`. Returns how many entries it
-/// took (a multiple of four); energy and max_ratio accumulate in entry order, only
-/// `with_counters` (otherwise the law's elastic energy and the overlap ratios are not formed and
-/// energy_sum and max_ratio_of are left as they are). `variant` selects the law's
+/// The touching list entries active.k[0..n) of a chunk (entries and particles as the filter
+/// appended them), four at a time with the law on the four lanes of a register (AVX2): records
+/// transposed in registers, geometry and law (evaluate_lanes), then the results added to
+/// force/torque contact by contact in list order (`direct`, one thread) or written to rows[9
+/// (first_row + a)] (several threads). Pair properties from `pairs` by the particles' `material`.
+/// Returns how many entries it took (a multiple of four); energy and max_ratio accumulate in entry
+/// order, only `with_counters` (otherwise the law's elastic energy and the overlap ratios are not
+/// formed and energy_sum and max_ratio_of are left as they are). `variant` selects the law's
 /// contact::LaneVariant (without_rolling only when rolling is 0).
 template <unsigned variant, class Law, bool direct, bool uniform, bool with_counters = true>
 std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std::int32_t* material,
@@ -469,7 +471,7 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
         const Columns vj = columns_at(a.vel, js);
         const Columns wi = columns_at(a.omega, is);
         const Columns wj = columns_at(a.omega, js);
-        const Columns sh = columns(a.shear, ks);
+        const Columns sh = columns_at(a.shear, ks);
         V d[3];
         for (int q = 0; q < 3; ++q) {
             d[q] = xi.c[q] - xj.c[q];
@@ -532,7 +534,7 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
                 _mm_storeu_pd(r + 6, tj.r[l]);
                 r[8] = c.tj[2][l];
             }
-            set(a.shear[ks[l]], s.r[l], c.s[2][l]);
+            set(at(a.shear, ks[l]), s.r[l], c.s[2][l]);
             if constexpr (with_counters) {
                 energy += c.energy[l];
             }

@@ -324,10 +324,11 @@ void System::index_bodies() {
 }
 
 void System::index_partners() {
-    // The register path and the inner lists take particles as 32-bit byte offsets of records.
-    KILN_ASSERT(p_.size() < std::numeric_limits<std::uint32_t>::max() / simd::record_bytes);
     // For each particle, the list entries where it is the partner, in increasing entry order.
     const auto& nb = nl_.partners();
+    // The filters hand particles and list entries as 32-bit byte offsets of records.
+    KILN_ASSERT(std::max(p_.size(), nb.size()) <
+                std::numeric_limits<std::uint32_t>::max() / simd::record_bytes);
     as_partner_offsets_.assign(p_.size() + 1, 0);
     for (const std::uint32_t j : nb) {
         ++as_partner_offsets_[j + 1];
@@ -511,6 +512,7 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
 
     // Which entries touch. Branch-free, so the ~50 % unpredictable outcome costs nothing;
     // histories of pairs apart are cleared.
+    // Their list entries as byte offsets of histories (simd::record_bytes times the entry).
     std::uint32_t active[pair_chunk_size];
     std::size_t n_active = 0;
 #ifdef __AVX2__
@@ -570,7 +572,7 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
             // Both -1 (spheres) keeps the sign bit; a body (index >= 0) on either side clears it.
             touch = touch && (shape[i] & shape[j]) < 0;
         }
-        active[n_active] = static_cast<std::uint32_t>(k);
+        active[n_active] = static_cast<std::uint32_t>(k) * simd::record_bytes;
 #ifdef __AVX2__
         active_i[n_active] = i * simd::record_bytes;
         active_j[n_active] = j * simd::record_bytes;
@@ -606,7 +608,7 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
         // is the velocity before the impact. Only reads: the forces are those of a run without
         // recording, bit for bit.
         for (std::size_t a = 0; a < n_active; ++a) {
-            const std::uint32_t k = active[a];
+            const std::uint32_t k = active[a] / simd::record_bytes;
             const std::uint32_t i = owner[k];
             const std::uint32_t j = nb[k];
             const double rsum = radius[i] + radius[j];
@@ -646,7 +648,7 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
     for (std::size_t a0 = a_first; a0 < n_active; a0 += block) {
         const std::size_t m = std::min(block, n_active - a0);
         for (std::size_t b = 0; b < m; ++b) {
-            const std::uint32_t k = active[a0 + b];
+            const std::uint32_t k = active[a0 + b] / simd::record_bytes;
             const std::uint32_t i = owner[k];
             const std::uint32_t j = nb[k];
             for (int q = 0; q < 3; ++q) {
@@ -682,7 +684,7 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
             contact::evaluate_block(law, fn_floor, rolling, c, b, dt);
         }
         for (std::size_t b = 0; b < m; ++b) {
-            const std::uint32_t k = active[a0 + b];
+            const std::uint32_t k = active[a0 + b] / simd::record_bytes;
             if constexpr (direct) {
                 const std::uint32_t i = owner[k];
                 const std::uint32_t j = nb[k];
