@@ -826,37 +826,52 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
         const auto& cand = wall_candidates_[w];
         const auto lo = std::lower_bound(cand.begin(), cand.end(), p0);
         const auto hi = std::lower_bound(lo, cand.end(), p1);
+        // Local pointers and count: through the members and the count that flush() shares, GCC
+        // loaded the arrays' addresses and the count again at every candidate.
+        const Vec3* __restrict x = p_.x.data();
+        const double* __restrict radius = p_.radius.data();
+        Vec3* __restrict history = wall_shear_.data() + w * wall_stride_;
+        const auto wall = static_cast<std::uint32_t>(w);
         std::visit(
             [&](const auto& shape) {
-                for (auto it = lo; it != hi; ++it) {
+                for (auto it = lo; it != hi;) {
                     if (n_active == capacity) {
                         flush();
                     }
-                    const std::uint32_t i = *it;
-                    const WallContact g = wall_contact(shape, p_.x[i], p_.radius[i]);
-                    const bool touch = g.overlap > 0.0;
-                    if constexpr (onsets) {
-                        // Touching now, apart at the start of the step (x - dt v, as for pairs).
-                        if (touch &&
-                            !(wall_contact(shape, p_.x[i] - dt * p_.v[i], p_.radius[i]).overlap >
-                              0.0)) {
-                            ContactOnset e;
-                            e.id_i = p_.id[i];
-                            e.wall = static_cast<std::int32_t>(w);
-                            e.speed = std::max(0.0, -p_.v[i].dot(g.n));
-                            e.r_eff = g.r_eff;
-                            e.m_eff = p_.mass[i];
-                            for (int q = 0; q < 3; ++q) {
-                                e.normal[q] = -g.n[q];
+                    // As many candidates as the arrays have room for.
+                    const auto stop =
+                        it + std::min<std::ptrdiff_t>(
+                                 hi - it, static_cast<std::ptrdiff_t>(capacity - n_active));
+                    std::size_t m = n_active;
+                    for (; it != stop; ++it) {
+                        const std::uint32_t i = *it;
+                        const WallContact g = wall_contact(shape, x[i], radius[i]);
+                        const bool touch = g.overlap > 0.0;
+                        if constexpr (onsets) {
+                            // Touching now, apart at the start of the step (x - dt v, as for
+                            // pairs).
+                            if (touch &&
+                                !(wall_contact(shape, x[i] - dt * p_.v[i], radius[i]).overlap >
+                                  0.0)) {
+                                ContactOnset e;
+                                e.id_i = p_.id[i];
+                                e.wall = static_cast<std::int32_t>(w);
+                                e.speed = std::max(0.0, -p_.v[i].dot(g.n));
+                                e.r_eff = g.r_eff;
+                                e.m_eff = p_.mass[i];
+                                for (int q = 0; q < 3; ++q) {
+                                    e.normal[q] = -g.n[q];
+                                }
+                                wall_onsets_[p0 / particle_unit_size].push_back(e);
                             }
-                            wall_onsets_[p0 / particle_unit_size].push_back(e);
                         }
+                        geo[m] = g;
+                        active[m] = i;
+                        wall_of[m] = wall;
+                        m += touch ? 1U : 0U;
+                        keep_or_clear(history[i], touch);
                     }
-                    geo[n_active] = g;
-                    active[n_active] = i;
-                    wall_of[n_active] = static_cast<std::uint32_t>(w);
-                    n_active += touch ? 1U : 0U;
-                    keep_or_clear(wall_shear_[w * wall_stride_ + i], touch);
+                    n_active = m;
                 }
             },
             spec_.walls[w].shape);
