@@ -38,11 +38,47 @@ inline double squared_distance(const Vec3& a, const Vec3& b) {
 #endif
 }
 
+/// Byte offset of particle record i in a Vec3 array (ActiveList and InnerChunk hand the register
+/// path and the inner filter offsets instead of indices: an index takes an address computation
+/// (i + 2 i, then times 8) per array, an offset none). Offsets are 32-bit: fewer than 2^32 / 24
+/// particles (System::index_partners checks).
+constexpr std::uint32_t record_bytes = sizeof(Vec3);
+
+/// The record at byte offset `off` of a.
+inline const Vec3& at(const Vec3* a, std::uint32_t off) {
+    return *reinterpret_cast<const Vec3*>(reinterpret_cast<const char*>(a) + off);
+}
+/// The record at byte offset `off` of a.
+inline Vec3& at(Vec3* a, std::uint32_t off) {
+    return *reinterpret_cast<Vec3*>(reinterpret_cast<char*>(a) + off);
+}
+
 #ifdef __AVX2__
 /// Components x, y, z of four records, one register each (lane l = record l).
 struct Columns {
     __m256d c[3];
 };
+
+/// Reads the records at byte offsets off[0..3] of a and transposes them into columns.
+inline Columns columns_at(const Vec3* __restrict a, const std::uint32_t off[4]) {
+    const double* r0 = at(a, off[0]).data();
+    const double* r1 = at(a, off[1]).data();
+    const double* r2 = at(a, off[2]).data();
+    const double* r3 = at(a, off[3]).data();
+    const __m256d r02 =
+        _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(r0)), _mm_loadu_pd(r2), 1);
+    const __m256d r13 =
+        _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(r1)), _mm_loadu_pd(r3), 1);
+    const __m128d z01 = _mm_loadh_pd(_mm_load_sd(r0 + 2), r1 + 2);
+    const __m128d z23 = _mm_loadh_pd(_mm_load_sd(r2 + 2), r3 + 2);
+    return {{_mm256_unpacklo_pd(r02, r13), _mm256_unpackhi_pd(r02, r13),
+             _mm256_insertf128_pd(_mm256_castpd128_pd256(z01), z23, 1)}};
+}
+
+/// The four 32-bit indices of v as byte offsets of Vec3 records.
+inline __m128i offsets_of(__m128i v) {
+    return _mm_mullo_epi32(v, _mm_set1_epi32(static_cast<int>(record_bytes)));
+}
 
 /// Reads the records a[p[0..3]] and transposes them into columns.
 inline Columns columns(const Vec3* __restrict a, const std::uint32_t p[4]) {
@@ -100,11 +136,11 @@ inline void set(Vec3& a, __m128d xy, double z) {
 
 #ifdef __AVX2__
 /// The touching list entries of a chunk as the filters append them, with their particles, so that
-/// the register path reads the particles' indices from consecutive places.
+/// the register path reads the particles' records from consecutive places.
 struct ActiveList {
-    std::uint32_t* k; ///< list entries
-    std::uint32_t* i; ///< their owners
-    std::uint32_t* j; ///< their partners
+    std::uint32_t* k; ///< list entries, as byte offsets of their histories (record_bytes times k)
+    std::uint32_t* i; ///< their owners, as byte offsets of records (record_bytes times the index)
+    std::uint32_t* j; ///< their partners, as byte offsets of records
 };
 
 /// Appends the 32-bit lanes of v whose bit is set in the 4-bit mask m to out[0..), in lane order
@@ -150,12 +186,12 @@ struct PairArrays {
 /// pointers are at the chunk's part of the arrays (its first entry index for the entries, a quarter
 /// of it for `was`).
 struct InnerChunk {
-    std::uint32_t* k;    ///< list entries
-    std::uint32_t* i;    ///< their owners
-    std::uint32_t* j;    ///< their partners
-    double* rsum2;       ///< their (r_i + r_j)^2 (m^2)
-    std::uint8_t* was;   ///< per group of four inner entries, bit l: inner entry 4 g + l touched
-                         ///< at the last filter (the inner list's own `touched`)
+    std::uint32_t* k;  ///< list entries
+    std::uint32_t* i;  ///< their owners, as byte offsets of records (record_bytes times the index)
+    std::uint32_t* j;  ///< their partners, as byte offsets of records
+    double* rsum2;     ///< their (r_i + r_j)^2 (m^2)
+    std::uint8_t* was; ///< per group of four inner entries, bit l: inner entry 4 g + l touched
+                       ///< at the last filter (the inner list's own `touched`)
     const double* near2; ///< list entry -> (r_i + r_j + inner gap)^2 (m^2), read when building
     std::size_t count;   ///< inner entries of the chunk
 };
@@ -216,11 +252,15 @@ std::size_t touching_entries(const PairArrays& arrays, std::size_t begin, std::s
         was = static_cast<std::uint8_t>(m);
         // The touching entries and their particles appended with one shuffle each (n + 3 stays
         // within the chunk: n counts touching entries before k).
+        constexpr int rb = static_cast<int>(record_bytes);
         append_lanes(active.k + n,
-                     _mm_add_epi32(_mm_set1_epi32(static_cast<int>(k)), _mm_setr_epi32(0, 1, 2, 3)),
+                     _mm_add_epi32(_mm_set1_epi32(static_cast<int>(k * record_bytes)),
+                                   _mm_setr_epi32(0, rb, 2 * rb, 3 * rb)),
                      m);
-        append_lanes(active.i + n, _mm_loadu_si128(reinterpret_cast<const __m128i*>(is)), m);
-        append_lanes(active.j + n, _mm_loadu_si128(reinterpret_cast<const __m128i*>(js)), m);
+        append_lanes(active.i + n,
+                     offsets_of(_mm_loadu_si128(reinterpret_cast<const __m128i*>(is))), m);
+        append_lanes(active.j + n,
+                     offsets_of(_mm_loadu_si128(reinterpret_cast<const __m128i*>(js))), m);
         if constexpr (with_rows) {
             std::size_t r = n;
             for (unsigned l = 0; l < 4; ++l) {
@@ -235,8 +275,8 @@ std::size_t touching_entries(const PairArrays& arrays, std::size_t begin, std::s
             const unsigned mn = m | static_cast<unsigned>(_mm256_movemask_pd(near));
             for (unsigned l = 0; l < 4; ++l) {
                 out.k[c] = static_cast<std::uint32_t>(k + l);
-                out.i[c] = is[l];
-                out.j[c] = js[l];
+                out.i[c] = is[l] * record_bytes;
+                out.j[c] = js[l] * record_bytes;
                 out.rsum2[c] = a.rsum2[k + l];
                 out.was[c / 4] |= static_cast<std::uint8_t>(((m >> l) & 1U) << (c % 4));
                 c += (mn >> l) & 1U;
@@ -268,8 +308,8 @@ void inner_touching_entries(const PairArrays& arrays, const InnerChunk& chunk, s
     std::size_t n = n_active;
     std::size_t c = 0;
     for (; c + 4 <= in.count; c += 4) {
-        const Columns xi = columns(a.x, in.i + c);
-        const Columns xj = columns(a.x, in.j + c);
+        const Columns xi = columns_at(a.x, in.i + c);
+        const Columns xj = columns_at(a.x, in.j + c);
         const __m256d d0 = _mm256_sub_pd(xi.c[0], xj.c[0]);
         const __m256d d1 = _mm256_sub_pd(xi.c[1], xj.c[1]);
         const __m256d d2 = _mm256_sub_pd(xi.c[2], xj.c[2]);
@@ -290,7 +330,7 @@ void inner_touching_entries(const PairArrays& arrays, const InnerChunk& chunk, s
         const auto lanes = [&](const std::uint32_t* p) {
             return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + c));
         };
-        append_lanes(active.k + n, lanes(in.k), m);
+        append_lanes(active.k + n, offsets_of(lanes(in.k)), m);
         append_lanes(active.i + n, lanes(in.i), m);
         append_lanes(active.j + n, lanes(in.j), m);
         if constexpr (with_rows) {
@@ -305,11 +345,11 @@ void inner_touching_entries(const PairArrays& arrays, const InnerChunk& chunk, s
     }
     for (; c < in.count; ++c) {
         const std::uint32_t k = in.k[c];
-        const bool t = squared_distance(a.x[in.i[c]], a.x[in.j[c]]) < in.rsum2[c];
+        const bool t = squared_distance(at(a.x, in.i[c]), at(a.x, in.j[c])) < in.rsum2[c];
         if (!t) {
             a.shear[k].setZero();
         }
-        active.k[n] = k;
+        active.k[n] = k * record_bytes;
         active.i[n] = in.i[c];
         active.j[n] = in.j[c];
         if constexpr (with_rows) {
@@ -321,15 +361,16 @@ void inner_touching_entries(const PairArrays& arrays, const InnerChunk& chunk, s
 }
 #endif
 
-/// The touching list entries active.k[0..n) of a chunk (their particles as the filter appended
-/// them), four at a time with the law on the four lanes of a register (AVX2): records transposed in
-/// registers, geometry and law (evaluate_lanes), then the results added to force/torque contact by
-/// contact in list order (`direct`, one thread) or written to rows[9 (first_row + a)] (several
-/// threads). Pair properties from `pairs` by the particles' `material`. Returns how many entries it
-/// took (a multiple of four); energy and max_ratio accumulate in entry order (the energy only
-/// `with_energy`: otherwise the law's elastic energy is not formed and energy_sum is left as it
-/// is). `variant` selects the law's contact::LaneVariant (without_rolling only when rolling is 0).
-template <unsigned variant, class Law, bool direct, bool uniform, bool with_energy = true>
+/// The touching list entries active.k[0..n) of a chunk (entries and particles as the filter
+/// appended them), four at a time with the law on the four lanes of a register (AVX2): records
+/// transposed in registers, geometry and law (evaluate_lanes), then the results added to
+/// force/torque contact by contact in list order (`direct`, one thread) or written to rows[9
+/// (first_row + a)] (several threads). Pair properties from `pairs` by the particles' `material`.
+/// Returns how many entries it took (a multiple of four); energy and max_ratio accumulate in entry
+/// order, only `with_counters` (otherwise the law's elastic energy and the overlap ratios are not
+/// formed and energy_sum and max_ratio_of are left as they are). `variant` selects the law's
+/// contact::LaneVariant (without_rolling only when rolling is 0).
+template <unsigned variant, class Law, bool direct, bool uniform, bool with_counters = true>
 std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std::int32_t* material,
                               double fn_floor, double rolling, double dt, const PairArrays& arrays,
                               const ActiveList& list, std::size_t n, std::size_t first_row,
@@ -404,16 +445,19 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
             V mi{};
             V mj{};
             for (int l = 0; l < W; ++l) {
-                ri[l] = a.radius[is[l]];
-                rj[l] = a.radius[js[l]];
-                mi[l] = a.mass[is[l]];
-                mj[l] = a.mass[js[l]];
+                const std::uint32_t i = is[l] / record_bytes;
+                const std::uint32_t j = js[l] / record_bytes;
+                ri[l] = a.radius[i];
+                rj[l] = a.radius[j];
+                mi[l] = a.mass[i];
+                mj[l] = a.mass[j];
             }
             z = sizes(ri, rj, mi, mj);
         }
         if (!one_pair) {
             for (int l = 0; l < W; ++l) {
-                const PairProperties& pp = pairs.at(material[is[l]], material[js[l]]);
+                const PairProperties& pp =
+                    pairs.at(material[is[l] / record_bytes], material[js[l] / record_bytes]);
                 c.e_star[l] = pp.effective_modulus;
                 c.g_star[l] = pp.effective_shear;
                 c.beta[l] = pp.beta;
@@ -421,13 +465,13 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
                 c.mu_roll[l] = pp.rolling_friction;
             }
         }
-        const Columns xi = columns(a.x, is);
-        const Columns xj = columns(a.x, js);
-        const Columns vi = columns(a.vel, is);
-        const Columns vj = columns(a.vel, js);
-        const Columns wi = columns(a.omega, is);
-        const Columns wj = columns(a.omega, js);
-        const Columns sh = columns(a.shear, ks);
+        const Columns xi = columns_at(a.x, is);
+        const Columns xj = columns_at(a.x, js);
+        const Columns vi = columns_at(a.vel, is);
+        const Columns vj = columns_at(a.vel, js);
+        const Columns wi = columns_at(a.omega, is);
+        const Columns wj = columns_at(a.omega, js);
+        const Columns sh = columns_at(a.shear, ks);
         V d[3];
         for (int q = 0; q < 3; ++q) {
             d[q] = xi.c[q] - xj.c[q];
@@ -455,10 +499,21 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
         c.m_eff = z.m_eff;
         c.lever_i = z.ri - 0.5 * overlap;
         c.lever_j = z.rj - 0.5 * overlap;
-        const auto larger = overlap * bottom > top * z.diameter;
-        top = select(larger, overlap, top);
-        bottom = select(larger, z.diameter, bottom);
+        if constexpr (with_counters) {
+            const auto larger = overlap * bottom > top * z.diameter;
+            top = select(larger, overlap, top);
+            bottom = select(larger, z.diameter, bottom);
+        }
         contact::evaluate_lanes<variant>(law, fn_floor, rolling, c, dt);
+        // The scatter reads the entries and offsets from the list again (L1): an empty asm that
+        // may read and write memory keeps GCC from holding the twelve of them in registers through
+        // the law, where they spilled others.
+        asm volatile("" ::: "memory");
+        for (int l = 0; l < W; ++l) {
+            ks[l] = active.k[g + l];
+            is[l] = active.i[g + l];
+            js[l] = active.j[g + l];
+        }
 
         const RowsXY f = rows_xy(c.f[0], c.f[1]);
         const RowsXY ti = rows_xy(c.ti[0], c.ti[1]);
@@ -466,10 +521,10 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
         const RowsXY s = rows_xy(c.s[0], c.s[1]);
         for (int l = 0; l < W; ++l) {
             if constexpr (direct) {
-                add_to(a.force[is[l]], f.r[l], c.f[2][l]);
-                sub_from(a.force[js[l]], f.r[l], c.f[2][l]);
-                add_to(a.torque[is[l]], ti.r[l], c.ti[2][l]);
-                add_to(a.torque[js[l]], tj.r[l], c.tj[2][l]);
+                add_to(at(a.force, is[l]), f.r[l], c.f[2][l]);
+                sub_from(at(a.force, js[l]), f.r[l], c.f[2][l]);
+                add_to(at(a.torque, is[l]), ti.r[l], c.ti[2][l]);
+                add_to(at(a.torque, js[l]), tj.r[l], c.tj[2][l]);
             } else {
                 double* r = a.rows + 9 * (first_row + g + l);
                 _mm_storeu_pd(r, f.r[l]);
@@ -479,14 +534,16 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
                 _mm_storeu_pd(r + 6, tj.r[l]);
                 r[8] = c.tj[2][l];
             }
-            set(a.shear[ks[l]], s.r[l], c.s[2][l]);
-            if constexpr (with_energy) {
+            set(at(a.shear, ks[l]), s.r[l], c.s[2][l]);
+            if constexpr (with_counters) {
                 energy += c.energy[l];
             }
         }
     }
-    for (int l = 0; l < W; ++l) {
-        max_ratio = std::max(max_ratio, top[l] / bottom[l]);
+    if constexpr (with_counters) {
+        for (int l = 0; l < W; ++l) {
+            max_ratio = std::max(max_ratio, top[l] / bottom[l]);
+        }
     }
     energy_sum = energy;
     max_ratio_of = max_ratio;
@@ -497,17 +554,20 @@ std::size_t contact_groups_as(const Law& law, const PairTable& pairs, const std:
 /// The sphere-wall contacts of System::wall_unit four at a time on the lanes of a register, with
 /// `variant` of the law (as contact_groups). Contact a is particle active[a] against wall
 /// wall_of[a] (wall material wall_material[wall]) with geometry geo[a] (world frame; the wall is
-/// body j, at rest, of infinite mass); histories in wall_shear[particle * nw + wall] (m). Forces
-/// and torques are added to the particles, energy (only `with_energy`) and max_ratio accumulate,
-/// contact by contact in order. A last group of fewer than four repeats its last contact in the
-/// free lanes, whose results are dropped (a copy of a lane does not change which branch the group
-/// takes, so the kept lanes get the same bits).
-template <unsigned variant, class Law, bool with_energy = true>
+/// body j, at rest, of infinite mass); histories in wall_shear[wall * stride + particle] (m).
+/// Forces and torques are added to the particles; energy and max_ratio accumulate, contact by
+/// contact in order, only `with_counters`. A last group of fewer than four repeats its last
+/// contact in the free lanes, whose results are dropped (a copy of a lane does not change which
+/// branch the group takes, so the kept lanes get the same bits). With `uniform`, every particle
+/// has the radius a.same_radius and the mass a.same_mass (taken once instead of per lane).
+template <unsigned variant, class Law, bool uniform, bool with_counters = true>
 void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
                  const int* wall_material, double fn_floor, double rolling, double dt,
                  const WallContact* geo, const std::uint32_t* active, const std::uint32_t* wall_of,
-                 std::size_t n, std::size_t nw, const PairArrays& arrays, Vec3* wall_shear,
+                 std::size_t n, std::size_t stride, const PairArrays& arrays, Vec3* wall_shear,
                  double& energy_sum, double& max_ratio_of) {
+    // A contact's normal and overlap are read as four consecutive doubles.
+    static_assert(sizeof(WallContact) == 5 * sizeof(double), "WallContact is n, overlap, r_eff");
     constexpr int W = 4;
     // Local copies of what the loop reads through references: the intrinsics' stores may alias any
     // memory, so GCC would load the pointers again after each of them (the same operations).
@@ -515,11 +575,12 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
     double energy = energy_sum;
     double max_ratio = max_ratio_of;
     using V = contact::lanes::V4;
+    using contact::lanes::splat;
     contact::ContactLanes<V> c{};
     for (int q = 0; q < 3; ++q) {
-        c.wj[q] = contact::lanes::splat(0.0, c.e_star);
+        c.wj[q] = splat(0.0, c.e_star);
     }
-    c.lever_j = contact::lanes::splat(0.0, c.e_star);
+    c.lever_j = splat(0.0, c.e_star);
     const bool one_pair = pairs.size() == 1;
     const auto set_lane = [&c](int l, const PairProperties& pp) {
         c.e_star[l] = pp.effective_modulus;
@@ -537,6 +598,10 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
         }
     }
     V radius{}; // the lanes' particle radii (m)
+    if constexpr (uniform) {
+        radius = splat(a.same_radius, radius);
+        c.m_eff = splat(a.same_mass, radius);
+    }
     for (std::size_t g = 0; g < n; g += W) {
         const std::size_t m = std::min<std::size_t>(W, n - g);
         std::uint32_t is[W];
@@ -545,17 +610,33 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
         for (int l = 0; l < W; ++l) {
             as[l] = g + std::min<std::size_t>(static_cast<std::size_t>(l), m - 1);
             is[l] = active[as[l]];
-            hs[l] = static_cast<std::uint32_t>(is[l] * nw + wall_of[as[l]]);
-            const WallContact& wc = geo[as[l]];
-            for (int q = 0; q < 3; ++q) {
-                c.n[q][l] = wc.n[q];
+            hs[l] = static_cast<std::uint32_t>(wall_of[as[l]] * stride + is[l]);
+        }
+        // (n0, n1, n2, overlap) of the four contacts, transposed into columns.
+        const auto row = [&](int l) { return _mm256_loadu_pd(geo[as[l]].n.data()); };
+        const __m256d g0 = row(0);
+        const __m256d g1 = row(1);
+        const __m256d g2 = row(2);
+        const __m256d g3 = row(3);
+        const __m256d lo01 = _mm256_unpacklo_pd(g0, g1); // n0 n0 | n2 n2 of lanes 0, 1
+        const __m256d hi01 = _mm256_unpackhi_pd(g0, g1); // n1 n1 | overlap overlap
+        const __m256d lo23 = _mm256_unpacklo_pd(g2, g3);
+        const __m256d hi23 = _mm256_unpackhi_pd(g2, g3);
+        c.n[0] = _mm256_permute2f128_pd(lo01, lo23, 0x20);
+        c.n[1] = _mm256_permute2f128_pd(hi01, hi23, 0x20);
+        c.n[2] = _mm256_permute2f128_pd(lo01, lo23, 0x31);
+        c.overlap = _mm256_permute2f128_pd(hi01, hi23, 0x31);
+        c.r_eff =
+            _mm256_setr_pd(geo[as[0]].r_eff, geo[as[1]].r_eff, geo[as[2]].r_eff, geo[as[3]].r_eff);
+        if constexpr (!uniform) {
+            for (int l = 0; l < W; ++l) {
+                c.m_eff[l] = a.mass[is[l]];
+                radius[l] = a.radius[is[l]];
             }
-            c.overlap[l] = wc.overlap;
-            c.r_eff[l] = wc.r_eff;
-            c.m_eff[l] = a.mass[is[l]];
-            radius[l] = a.radius[is[l]];
-            c.lever_i[l] = radius[l] - wc.overlap;
-            if (!one_pair) {
+        }
+        c.lever_i = radius - c.overlap;
+        if (!one_pair) {
+            for (int l = 0; l < W; ++l) {
                 set_lane(l, pairs.at(material[is[l]], wall_material[wall_of[as[l]]]));
             }
         }
@@ -568,7 +649,10 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
             c.s[q] = sh.c[q];
         }
         contact::evaluate_lanes<variant>(law, fn_floor, rolling, c, dt);
-        const V ratio = c.overlap / (2.0 * radius); // one division for the four lanes
+        V ratio{};
+        if constexpr (with_counters) {
+            ratio = c.overlap / (2.0 * radius); // one division for the four lanes
+        }
         const RowsXY f = rows_xy(c.f[0], c.f[1]);
         const RowsXY ti = rows_xy(c.ti[0], c.ti[1]);
         const RowsXY s = rows_xy(c.s[0], c.s[1]);
@@ -576,10 +660,10 @@ void wall_groups(const Law& law, const PairTable& pairs, const std::int32_t* mat
             add_to(a.force[is[l]], f.r[l], c.f[2][l]);
             add_to(a.torque[is[l]], ti.r[l], c.ti[2][l]);
             set(wall_shear[hs[l]], s.r[l], c.s[2][l]);
-            if constexpr (with_energy) {
+            if constexpr (with_counters) {
                 energy += c.energy[l];
+                max_ratio = std::max(max_ratio, ratio[l]);
             }
-            max_ratio = std::max(max_ratio, ratio[l]);
         }
     }
     energy_sum = energy;
@@ -615,37 +699,41 @@ template <class Run> decltype(auto) with_flag(bool on, Run&& run) {
 }
 
 /// wall_groups with the cheapest variant of the law (with_cheapest_variant; the walls give no
-/// centre difference, so the history is projected with n). The elastic energy is summed only
-/// `with_energy`.
+/// centre difference, so the history is projected with n). The elastic energy and the overlap
+/// ratios are summed only `with_counters`.
 template <class Law>
 void wall_contacts(const Law& law, const PairTable& pairs, const std::int32_t* material,
                    const int* wall_material, double fn_floor, double rolling, double dt,
                    const WallContact* geo, const std::uint32_t* active,
-                   const std::uint32_t* wall_of, std::size_t n, std::size_t nw, const PairArrays& a,
-                   Vec3* wall_shear, double& energy, double& max_ratio, bool with_energy) {
+                   const std::uint32_t* wall_of, std::size_t n, std::size_t stride,
+                   const PairArrays& a, Vec3* wall_shear, double& energy, double& max_ratio,
+                   bool with_counters) {
     with_cheapest_variant<contact::cap_when_sliding>(pairs, rolling, [&](auto variant) {
-        with_flag(with_energy, [&](auto sum_energy) {
-            wall_groups<decltype(variant)::value, Law, decltype(sum_energy)::value>(
-                law, pairs, material, wall_material, fn_floor, rolling, dt, geo, active, wall_of, n,
-                nw, a, wall_shear, energy, max_ratio);
+        with_flag(a.same_radius > 0.0, [&](auto uniform) {
+            with_flag(with_counters, [&](auto sum_counters) {
+                wall_groups<decltype(variant)::value, Law, decltype(uniform)::value,
+                            decltype(sum_counters)::value>(
+                    law, pairs, material, wall_material, fn_floor, rolling, dt, geo, active,
+                    wall_of, n, stride, a, wall_shear, energy, max_ratio);
+            });
         });
     });
 }
 
 /// contact_groups_as with the cheapest variant of the law (with_cheapest_variant), the history
 /// projected with the centre difference; R* and m* taken once when a.same_radius is set; the
-/// elastic energy summed only `with_energy`.
+/// elastic energy and the overlap ratios summed only `with_counters`.
 template <class Law, bool direct>
 std::size_t contact_groups(const Law& law, const PairTable& pairs, const std::int32_t* material,
                            double fn_floor, double rolling, double dt, const PairArrays& a,
                            const ActiveList& active, std::size_t n, std::size_t first_row,
-                           double& energy, double& max_ratio, bool with_energy) {
+                           double& energy, double& max_ratio, bool with_counters) {
     constexpr unsigned base = contact::cap_when_sliding | contact::project_by_distance;
     return with_cheapest_variant<base>(pairs, rolling, [&](auto variant) {
         return with_flag(a.same_radius > 0.0, [&](auto uniform) {
-            return with_flag(with_energy, [&](auto sum_energy) {
+            return with_flag(with_counters, [&](auto sum_counters) {
                 return contact_groups_as<decltype(variant)::value, Law, direct,
-                                         decltype(uniform)::value, decltype(sum_energy)::value>(
+                                         decltype(uniform)::value, decltype(sum_counters)::value>(
                     law, pairs, material, fn_floor, rolling, dt, a, active, n, first_row, energy,
                     max_ratio);
             });

@@ -114,7 +114,7 @@ std::size_t System::add_particle(int material, double radius, const Vec3& x, con
                                  const Vec3& omega) {
     const double rho = spec_.materials.at(static_cast<std::size_t>(material)).density;
     const std::size_t i = p_.add_sphere(next_id_++, material, radius, rho, x, v, omega);
-    wall_shear_.resize(p_.size() * spec_.walls.size(), Vec3::Zero());
+    grow_wall_histories();
     list_valid_ = false;
     return i;
 }
@@ -125,10 +125,27 @@ std::size_t System::add_body(int material, int shape, const Vec3& x, const Vec3&
     const double rho = spec_.materials.at(static_cast<std::size_t>(material)).density;
     const std::size_t i = p_.add_body(next_id_++, material, shape, t.bounding_radius(), t.mass(rho),
                                       t.inertia(rho), x, v, q, omega);
-    wall_shear_.resize(p_.size() * spec_.walls.size(), Vec3::Zero());
+    grow_wall_histories();
     has_bodies_ = true;
     list_valid_ = false;
     return i;
+}
+
+void System::grow_wall_histories() {
+    const std::size_t n = p_.size();
+    if (n <= wall_stride_) {
+        return;
+    }
+    const std::size_t nw = spec_.walls.size();
+    const std::size_t stride = std::max({n, 2 * wall_stride_, std::size_t{64}});
+    std::vector<Vec3> grown(nw * stride, Vec3::Zero());
+    for (std::size_t w = 0; w < nw; ++w) {
+        std::copy_n(wall_shear_.begin() + static_cast<std::ptrdiff_t>(w * wall_stride_),
+                    wall_stride_, grown.begin() + static_cast<std::ptrdiff_t>(w * stride));
+    }
+    wall_shear_.swap(grown);
+    wall_stride_ = stride;
+    wall_shear_spare_.clear(); // of the old size; carry_wall_histories sizes it again
 }
 
 Quat System::initial_orientation(const OrientationSpec& o) {
@@ -258,17 +275,18 @@ void System::carry_wall_histories(const std::vector<std::uint32_t>& order,
     for (std::size_t k = 0; k < n; ++k) {
         new_place_[order[k]] = static_cast<std::uint32_t>(k);
     }
-    wall_mark_.assign(n * nw, 0);
+    const std::size_t stride = wall_stride_;
+    wall_mark_.assign(nw * stride, 0);
     for (std::size_t w = 0; w < nw; ++w) {
         for (const std::uint32_t i : wall_candidates_[w]) {
-            wall_mark_[i * nw + w] = 1;
+            wall_mark_[w * stride + i] = 1;
         }
     }
     wall_shear_spare_.resize(wall_shear_.size(), Vec3::Zero());
     for (std::size_t w = 0; w < std::min(nw, old_candidates.size()); ++w) {
         for (const std::uint32_t i : old_candidates[w]) {
-            Vec3& s = wall_shear_[i * nw + w];
-            const std::size_t to = new_place_[i] * nw + w;
+            Vec3& s = wall_shear_[w * stride + i];
+            const std::size_t to = w * stride + new_place_[i];
             if (wall_mark_[to] != 0) {
                 wall_shear_spare_[to] = s;
             }
@@ -327,6 +345,9 @@ void System::index_bodies() {
 void System::index_partners() {
     // For each particle, the list entries where it is the partner, in increasing entry order.
     const auto& nb = nl_.partners();
+    // The filters hand particles and list entries as 32-bit byte offsets of records.
+    KILN_ASSERT(std::max(p_.size(), nb.size()) <
+                std::numeric_limits<std::uint32_t>::max() / simd::record_bytes);
     as_partner_offsets_.assign(p_.size() + 1, 0);
     for (const std::uint32_t j : nb) {
         ++as_partner_offsets_[j + 1];
@@ -466,7 +487,7 @@ void System::find_wall_candidates() {
 
 void System::refresh() {
     rebuild_neighbours();
-    form_energy_ = true;
+    form_counters_ = true;
     compute_forces();
 }
 
@@ -511,6 +532,7 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
 
     // Which entries touch. Branch-free, so the ~50 % unpredictable outcome costs nothing;
     // histories of pairs apart are cleared.
+    // Their list entries as byte offsets of histories (simd::record_bytes times the entry).
     std::uint32_t active[pair_chunk_size];
     std::size_t n_active = 0;
 #ifdef __AVX2__
@@ -570,10 +592,10 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
             // Both -1 (spheres) keeps the sign bit; a body (index >= 0) on either side clears it.
             touch = touch && (shape[i] & shape[j]) < 0;
         }
-        active[n_active] = static_cast<std::uint32_t>(k);
+        active[n_active] = static_cast<std::uint32_t>(k) * simd::record_bytes;
 #ifdef __AVX2__
-        active_i[n_active] = i;
-        active_j[n_active] = j;
+        active_i[n_active] = i * simd::record_bytes;
+        active_j[n_active] = j * simd::record_bytes;
 #endif
         if constexpr (!direct) {
             // Rows of a chunk are its touching entries in order, from the chunk's first row.
@@ -606,7 +628,7 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
         // is the velocity before the impact. Only reads: the forces are those of a run without
         // recording, bit for bit.
         for (std::size_t a = 0; a < n_active; ++a) {
-            const std::uint32_t k = active[a];
+            const std::uint32_t k = active[a] / simd::record_bytes;
             const std::uint32_t i = owner[k];
             const std::uint32_t j = nb[k];
             const double rsum = radius[i] + radius[j];
@@ -641,12 +663,12 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
 #ifdef __AVX2__
     a_first = simd::contact_groups<Law, direct>(law, pairs_, p_.material.data(), fn_floor, rolling,
                                                 dt, arrays, act, n_active, begin, energy, max_ratio,
-                                                form_energy_);
+                                                form_counters_);
 #endif
     for (std::size_t a0 = a_first; a0 < n_active; a0 += block) {
         const std::size_t m = std::min(block, n_active - a0);
         for (std::size_t b = 0; b < m; ++b) {
-            const std::uint32_t k = active[a0 + b];
+            const std::uint32_t k = active[a0 + b] / simd::record_bytes;
             const std::uint32_t i = owner[k];
             const std::uint32_t j = nb[k];
             for (int q = 0; q < 3; ++q) {
@@ -682,7 +704,7 @@ void System::pair_chunk(const Law& law, std::size_t begin, std::size_t end, Chun
             contact::evaluate_block(law, fn_floor, rolling, c, b, dt);
         }
         for (std::size_t b = 0; b < m; ++b) {
-            const std::uint32_t k = active[a0 + b];
+            const std::uint32_t k = active[a0 + b] / simd::record_bytes;
             if constexpr (direct) {
                 const std::uint32_t i = owner[k];
                 const std::uint32_t j = nb[k];
@@ -766,10 +788,10 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
         const simd::PairArrays arrays{
             nullptr,         nullptr,          nullptr,        p_.x.data(),     p_.v.data(),
             p_.omega.data(), p_.radius.data(), p_.mass.data(), p_.force.data(), p_.torque.data(),
-            nullptr,         nullptr,          nullptr};
+            nullptr,         nullptr,          nullptr,        same_radius_,    same_mass_};
         simd::wall_contacts(law, pairs_, p_.material.data(), wall_material_.data(), fn_floor,
-                            rolling, dt, geo, active, wall_of, n_active, nw, arrays,
-                            wall_shear_.data(), t.energy, t.max_ratio, form_energy_);
+                            rolling, dt, geo, active, wall_of, n_active, wall_stride_, arrays,
+                            wall_shear_.data(), t.energy, t.max_ratio, form_counters_);
 #else
         // In blocks with the branch-free law.
         contact::ContactBlock<block> c;
@@ -786,7 +808,7 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
                 const std::uint32_t i = active[a0 + b];
                 const WallContact& g = geo[a0 + b];
                 const std::uint32_t w = wall_of[a0 + b];
-                const Vec3& s = wall_shear_[i * nw + w];
+                const Vec3& s = wall_shear_[w * wall_stride_ + i];
                 for (int q = 0; q < 3; ++q) {
                     c.n[q][b] = g.n[q];
                     c.v[q][b] = p_.v[i][q];
@@ -808,7 +830,8 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
                 const std::uint32_t i = active[a0 + b];
                 p_.force[i] += Vec3(c.f[0][b], c.f[1][b], c.f[2][b]);
                 p_.torque[i] += Vec3(c.ti[0][b], c.ti[1][b], c.ti[2][b]);
-                wall_shear_[i * nw + wall_of[a0 + b]] = Vec3(c.s[0][b], c.s[1][b], c.s[2][b]);
+                wall_shear_[wall_of[a0 + b] * wall_stride_ + i] =
+                    Vec3(c.s[0][b], c.s[1][b], c.s[2][b]);
                 t.energy += c.energy[b];
                 t.max_ratio = std::max(t.max_ratio, ratio[b]);
             }
@@ -823,37 +846,52 @@ void System::wall_unit(const Law& law, std::size_t p0, std::size_t p1, ChunkTota
         const auto& cand = wall_candidates_[w];
         const auto lo = std::lower_bound(cand.begin(), cand.end(), p0);
         const auto hi = std::lower_bound(lo, cand.end(), p1);
+        // Local pointers and count: through the members and the count that flush() shares, GCC
+        // loaded the arrays' addresses and the count again at every candidate.
+        const Vec3* __restrict x = p_.x.data();
+        const double* __restrict radius = p_.radius.data();
+        Vec3* __restrict history = wall_shear_.data() + w * wall_stride_;
+        const auto wall = static_cast<std::uint32_t>(w);
         std::visit(
             [&](const auto& shape) {
-                for (auto it = lo; it != hi; ++it) {
+                for (auto it = lo; it != hi;) {
                     if (n_active == capacity) {
                         flush();
                     }
-                    const std::uint32_t i = *it;
-                    const WallContact g = wall_contact(shape, p_.x[i], p_.radius[i]);
-                    const bool touch = g.overlap > 0.0;
-                    if constexpr (onsets) {
-                        // Touching now, apart at the start of the step (x - dt v, as for pairs).
-                        if (touch &&
-                            !(wall_contact(shape, p_.x[i] - dt * p_.v[i], p_.radius[i]).overlap >
-                              0.0)) {
-                            ContactOnset e;
-                            e.id_i = p_.id[i];
-                            e.wall = static_cast<std::int32_t>(w);
-                            e.speed = std::max(0.0, -p_.v[i].dot(g.n));
-                            e.r_eff = g.r_eff;
-                            e.m_eff = p_.mass[i];
-                            for (int q = 0; q < 3; ++q) {
-                                e.normal[q] = -g.n[q];
+                    // As many candidates as the arrays have room for.
+                    const auto stop =
+                        it + std::min<std::ptrdiff_t>(
+                                 hi - it, static_cast<std::ptrdiff_t>(capacity - n_active));
+                    std::size_t m = n_active;
+                    for (; it != stop; ++it) {
+                        const std::uint32_t i = *it;
+                        const WallContact g = wall_contact(shape, x[i], radius[i]);
+                        const bool touch = g.overlap > 0.0;
+                        if constexpr (onsets) {
+                            // Touching now, apart at the start of the step (x - dt v, as for
+                            // pairs).
+                            if (touch &&
+                                !(wall_contact(shape, x[i] - dt * p_.v[i], radius[i]).overlap >
+                                  0.0)) {
+                                ContactOnset e;
+                                e.id_i = p_.id[i];
+                                e.wall = static_cast<std::int32_t>(w);
+                                e.speed = std::max(0.0, -p_.v[i].dot(g.n));
+                                e.r_eff = g.r_eff;
+                                e.m_eff = p_.mass[i];
+                                for (int q = 0; q < 3; ++q) {
+                                    e.normal[q] = -g.n[q];
+                                }
+                                wall_onsets_[p0 / particle_unit_size].push_back(e);
                             }
-                            wall_onsets_[p0 / particle_unit_size].push_back(e);
                         }
+                        geo[m] = g;
+                        active[m] = i;
+                        wall_of[m] = wall;
+                        m += touch ? 1U : 0U;
+                        keep_or_clear(history[i], touch);
                     }
-                    geo[n_active] = g;
-                    active[n_active] = i;
-                    wall_of[n_active] = static_cast<std::uint32_t>(w);
-                    n_active += touch ? 1U : 0U;
-                    keep_or_clear(wall_shear_[i * nw + w], touch);
+                    n_active = m;
                 }
             },
             spec_.walls[w].shape);
@@ -1012,8 +1050,8 @@ void System::loosen(const std::vector<std::uint32_t>& loose) {
             for (std::uint64_t bits = inner_bits_[word]; bits != 0; bits &= bits - 1) {
                 const std::size_t k = word * 64 + static_cast<std::size_t>(std::countr_zero(bits));
                 inner_k_[c] = static_cast<std::uint32_t>(k);
-                inner_i_[c] = owner[k];
-                inner_j_[c] = nb[k];
+                inner_i_[c] = owner[k] * simd::record_bytes;
+                inner_j_[c] = nb[k] * simd::record_bytes;
                 inner_rsum2_[c] = entry_rsum2_[k];
                 ++c;
             }
@@ -1384,7 +1422,7 @@ bool System::begin_step(int kicks) {
 
 void System::step() {
     const bool cleared = begin_step(1);
-    form_energy_ = true;
+    form_counters_ = true;
     compute_forces(true, cleared);
     ++step_;
     time_ = static_cast<double>(step_) * spec_.time_step;
@@ -1403,15 +1441,15 @@ void System::advance(long steps) {
     for (long s = 0; s < steps; ++s) {
         const bool last = s + 1 == steps;
         // The second half kick of every step but the last waits for the next step's pass. The
-        // counters of the steps before the last cannot be read: their elastic energy (the
-        // spheres') is not formed (use_energy_on_demand).
+        // counters of the steps before the last cannot be read: the spheres' elastic energy and
+        // largest overlap ratio are not formed (use_energy_on_demand).
         const bool cleared = begin_step(s == 0 ? 1 : 2);
-        form_energy_ = last || !energy_on_demand_;
+        form_counters_ = last || !energy_on_demand_;
         compute_forces(last, cleared);
         ++step_;
         time_ = static_cast<double>(step_) * spec_.time_step;
     }
-    form_energy_ = true;
+    form_counters_ = true;
 }
 
 void System::collect_contacts(std::vector<ContactRecord>& out) const {
@@ -1534,7 +1572,14 @@ SystemState System::save_state() const {
     s.nl_x_build = nl_.positions_at_build();
     s.nl_ids = p_.id;
     s.nl_builds = nl_.builds();
-    s.wall_shear = wall_shear_;
+    // Particle by particle ([particle * n_walls + wall]), whatever the stride.
+    const std::size_t nw = spec_.walls.size();
+    s.wall_shear.assign(p_.size() * nw, Vec3::Zero());
+    for (std::size_t w = 0; w < nw; ++w) {
+        for (std::size_t i = 0; i < p_.size(); ++i) {
+            s.wall_shear[i * nw + w] = wall_shear_[w * wall_stride_ + i];
+        }
+    }
     s.time = time_;
     s.step = step_;
     s.next_id = next_id_;
@@ -1556,7 +1601,15 @@ void System::restore_state(SystemState s) {
     p_ = std::move(s.particles);
     nl_.restore(std::move(s.nl_offsets), std::move(s.nl_partners), std::move(s.nl_shear),
                 std::move(s.nl_x_build), std::move(s.nl_ids), s.nl_builds);
-    wall_shear_ = std::move(s.wall_shear);
+    const std::size_t nw = spec_.walls.size();
+    wall_stride_ = p_.size();
+    wall_shear_.assign(nw * wall_stride_, Vec3::Zero());
+    wall_shear_spare_.clear();
+    for (std::size_t w = 0; w < nw; ++w) {
+        for (std::size_t i = 0; i < wall_stride_; ++i) {
+            wall_shear_[w * wall_stride_ + i] = s.wall_shear[i * nw + w];
+        }
+    }
     time_ = s.time;
     step_ = s.step;
     next_id_ = s.next_id;

@@ -191,10 +191,11 @@ class System {
         use_inner_ = on;
         inner_valid_ = false;
     }
-    /// Lets advance() form the elastic energy of the sphere contacts (pairs and walls) only at its
-    /// last step, the one whose counters() and energies() can be read (on, the default), or at
-    /// every step (off). Positions, velocities, forces and the counters read after a step(),
-    /// advance() or refresh() are the same bits either way (tests, A/B).
+    /// Lets advance() form the elastic energy and the largest overlap ratio of the sphere contacts
+    /// (pairs and walls) only at its last step, the one whose counters() and energies() can be
+    /// read (on, the default), or at every step (off). Positions, velocities, forces and the
+    /// counters read after a step(), advance() or refresh() are the same bits either way (tests,
+    /// A/B).
     void use_energy_on_demand(bool on) { energy_on_demand_ = on; }
     /// Lets the register path of the sphere pairs take R* and m* once when every particle has the
     /// same radius and mass (on, the default; from the next list build) or per contact (off, at
@@ -250,14 +251,23 @@ class System {
     /// to the particles' new places after the store was reordered (new k <- old order[k]).
     void carry_wall_histories(const std::vector<std::uint32_t>& order,
                               const std::vector<std::vector<std::uint32_t>>& old_candidates);
+    /// Makes room in wall_shear_ for every particle of the store (the stride at least doubles, so
+    /// that adding particles one by one moves each history a bounded number of times).
+    void grow_wall_histories();
 
     SceneSpec spec_;
     PairTable pairs_;
     ParticleStore p_;
     contact::NeighbourList nl_;
-    std::vector<Vec3> wall_shear_; // [particle * n_walls + wall]
+    // Wall histories, wall by wall: [wall * wall_stride_ + particle] (wall_stride_ >= the number
+    // of particles). A wall's candidates are in increasing particle order, and those of a plane
+    // wall are mostly runs of neighbouring indices (the store is sorted by cell), so the scan and
+    // the law read each wall's histories nearly in sequence (SystemState keeps them particle by
+    // particle).
+    std::vector<Vec3> wall_shear_;
+    std::size_t wall_stride_ = 0;
     // Scratch of carry_wall_histories: an all-zero array of wall_shear_'s size, the new place of
-    // each particle and a flag per (particle, wall) of the new candidates.
+    // each particle and a flag per (wall, particle) of the new candidates (wall_shear_'s layout).
     std::vector<Vec3> wall_shear_spare_;
     std::vector<std::uint32_t> new_place_;
     std::vector<std::uint8_t> wall_mark_;
@@ -305,7 +315,7 @@ class System {
     bool use_inner_ = true;        // use_inner_list()
     bool use_uniform_ = true;      // use_uniform_sizes()
     bool energy_on_demand_ = true; // use_energy_on_demand()
-    bool form_energy_ = true;      // the next force evaluation sums the elastic energy
+    bool form_counters_ = true;    // the next force evaluation forms the energy and overlap ratio
     std::size_t inner_loose_ = 0;  // loose particles since the inner build
     long inner_next_build_ = 0;    // no inner build before this step (after dropping them)
     static constexpr long inner_holdoff = 200;              // steps

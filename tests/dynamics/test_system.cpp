@@ -479,8 +479,9 @@ TEST(System, UniformSizesGiveTheBitsOfThePerContactSizes) {
     }
 }
 
-// advance() forms the elastic energy of the sphere contacts only at its last step (the one whose
-// counters can be read); with use_energy_on_demand(false) at every step. Both must give the same
+// advance() forms the elastic energy and the largest overlap ratio of the sphere contacts only at
+// its last step (the one whose counters can be read); with use_energy_on_demand(false) at every
+// step. Both must give the same
 // bits for the state and the same counters and energies whenever they can be read: after advance()
 // runs of any length (1 takes the unfused path), after step() and after a restart. The pour has two
 // material pairs, walls and rolling resistance; the lattice one radius and one material pair (the
@@ -495,6 +496,7 @@ TEST(System, EnergyOnDemandGivesTheEnergiesOfEveryStep) {
             every.use_energy_on_demand(false);
             auto on_demand = std::make_unique<System>(spec());
             double largest = 0.0;
+            double largest_ratio = 0.0;
             const std::vector<long> runs = {1, 2, 3, 97, 1, 396, 500};
             for (std::size_t r = 0; r < runs.size(); ++r) {
                 every.advance(runs[r]);
@@ -533,8 +535,10 @@ TEST(System, EnergyOnDemandGivesTheEnergiesOfEveryStep) {
                 EXPECT_EQ(every.energies().elastic, on_demand->energies().elastic) << at;
                 EXPECT_EQ(every.energies().total(), on_demand->energies().total()) << at;
                 largest = std::max(largest, on_demand->counters().elastic_energy);
+                largest_ratio = std::max(largest_ratio, on_demand->counters().max_overlap_ratio);
             }
             EXPECT_GT(largest, 0.0) << threads << " threads, scene " << scene;
+            EXPECT_GT(largest_ratio, 0.0) << threads << " threads, scene " << scene;
         }
     }
 }
