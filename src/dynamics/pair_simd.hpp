@@ -59,33 +59,8 @@ struct Columns {
     __m256d c[3];
 };
 
-/// Reads the records at byte offsets off[0..3] of a and transposes them into columns.
-inline Columns columns_at(const Vec3* __restrict a, const std::uint32_t off[4]) {
-    const double* r0 = at(a, off[0]).data();
-    const double* r1 = at(a, off[1]).data();
-    const double* r2 = at(a, off[2]).data();
-    const double* r3 = at(a, off[3]).data();
-    const __m256d r02 =
-        _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(r0)), _mm_loadu_pd(r2), 1);
-    const __m256d r13 =
-        _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(r1)), _mm_loadu_pd(r3), 1);
-    const __m128d z01 = _mm_loadh_pd(_mm_load_sd(r0 + 2), r1 + 2);
-    const __m128d z23 = _mm_loadh_pd(_mm_load_sd(r2 + 2), r3 + 2);
-    return {{_mm256_unpacklo_pd(r02, r13), _mm256_unpackhi_pd(r02, r13),
-             _mm256_insertf128_pd(_mm256_castpd128_pd256(z01), z23, 1)}};
-}
-
-/// The four 32-bit indices of v as byte offsets of Vec3 records.
-inline __m128i offsets_of(__m128i v) {
-    return _mm_mullo_epi32(v, _mm_set1_epi32(static_cast<int>(record_bytes)));
-}
-
-/// Reads the records a[p[0..3]] and transposes them into columns.
-inline Columns columns(const Vec3* __restrict a, const std::uint32_t p[4]) {
-    const double* r0 = a[p[0]].data();
-    const double* r1 = a[p[1]].data();
-    const double* r2 = a[p[2]].data();
-    const double* r3 = a[p[3]].data();
+/// Transposes the records r0..r3 (three doubles each) into columns.
+inline Columns columns_of(const double* r0, const double* r1, const double* r2, const double* r3) {
     // (x0, y0 | x2, y2) and (x1, y1 | x3, y3), unpacked into (x0, x1, x2, x3) and (y0, .., y3).
     const __m256d r02 =
         _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(r0)), _mm_loadu_pd(r2), 1);
@@ -95,6 +70,22 @@ inline Columns columns(const Vec3* __restrict a, const std::uint32_t p[4]) {
     const __m128d z23 = _mm_loadh_pd(_mm_load_sd(r2 + 2), r3 + 2);
     return {{_mm256_unpacklo_pd(r02, r13), _mm256_unpackhi_pd(r02, r13),
              _mm256_insertf128_pd(_mm256_castpd128_pd256(z01), z23, 1)}};
+}
+
+/// Reads the records at byte offsets off[0..3] of a and transposes them into columns.
+inline Columns columns_at(const Vec3* __restrict a, const std::uint32_t off[4]) {
+    return columns_of(at(a, off[0]).data(), at(a, off[1]).data(), at(a, off[2]).data(),
+                      at(a, off[3]).data());
+}
+
+/// The four 32-bit indices of v as byte offsets of Vec3 records.
+inline __m128i offsets_of(__m128i v) {
+    return _mm_mullo_epi32(v, _mm_set1_epi32(static_cast<int>(record_bytes)));
+}
+
+/// Reads the records a[p[0..3]] and transposes them into columns.
+inline Columns columns(const Vec3* __restrict a, const std::uint32_t p[4]) {
+    return columns_of(a[p[0]].data(), a[p[1]].data(), a[p[2]].data(), a[p[3]].data());
 }
 #endif
 
