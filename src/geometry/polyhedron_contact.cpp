@@ -170,10 +170,10 @@ double segment_point_distance2(const Vec3& p0, const Vec3& p1, const Vec3& c) {
 namespace {
 
 using namespace search;
-using detail::clip_convex;
+using detail::clip_convex_into;
 using detail::clip_edge;
-using detail::hull_2d;
-using detail::section;
+using detail::hull_2d_into;
+using detail::section_into;
 using detail::Vec2;
 
 /// Gauss-map test of Gregorius (2013): do the arcs (a, b) of A's edge and (c, d) of B's negated
@@ -327,52 +327,70 @@ PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b,
     const Vec3 u = m.unitOrthogonal();
     const Vec3 v = m.cross(u);
 
-    // Vertices of A n B: edges of each body clipped by the other's face planes.
-    // With the edge lists of the plane search, only the edges it kept: a dropped edge lies wholly
-    // outside one face plane of the other body, so its clip is empty anyway.
-    std::vector<Vec3> raw;
-    const auto clip_a = [&](const std::array<int, 4>& e) {
-        clip_edge(fa.vertices[static_cast<std::size_t>(e[0])],
-                  fa.vertices[static_cast<std::size_t>(e[1])], r.nb, r.ob, raw);
-    };
-    const auto clip_b = [&](const std::array<int, 4>& e) {
-        clip_edge(r.vb[static_cast<std::size_t>(e[0])], r.vb[static_cast<std::size_t>(e[1])],
-                  fa.face_normals, fa.face_offsets, raw);
-    };
-    if (r.pruned) {
-        for (const int e : r.edges_a) {
-            clip_a(fa.edges[static_cast<std::size_t>(e)]);
-        }
-        for (const int e : r.edges_b) {
-            clip_b(fb.edges[static_cast<std::size_t>(e)]);
-        }
-    } else {
-        for (const auto& e : fa.edges) {
-            clip_a(e);
-        }
-        for (const auto& e : fb.edges) {
-            clip_b(e);
-        }
-    }
-    const double tol2 = 1e-24 * scale * scale;
-    std::vector<Vec3> pts;
-    for (const Vec3& p : raw) {
-        add_unique(pts, p, tol2);
-    }
-
-    // Patch: section of A by the CP clipped by the section of B.
+    // Patch: section of A by the CP clipped by the section of B. (Per-thread buffers: a resting
+    // face-on-face pair builds it every step.)
+    thread_local std::vector<Vec2> sec_a;
+    thread_local std::vector<Vec2> sec_b;
+    thread_local std::vector<Vec2> sa;
+    thread_local std::vector<Vec2> poly;
+    thread_local std::vector<Vec2> scratch;
     const double area_tol = 1e-24 * scale * scale;
-    const std::vector<Vec2> sa = hull_2d(section(fa.vertices, fa.edges, m, s, u, v), area_tol);
-    const std::vector<Vec2> sb = hull_2d(section(r.vb, fb.edges, m, s, u, v), area_tol);
-    std::vector<Vec2> poly;
-    if (sa.size() >= 3 && sb.size() >= 3) {
-        poly = clip_convex(sa, sb);
+    section_into(fa.vertices, fa.edges, m, s, u, v, sec_a);
+    hull_2d_into(sec_a, area_tol, sa);
+    section_into(r.vb, fb.edges, m, s, u, v, sec_b);
+    hull_2d_into(sec_b, area_tol, scratch);
+    poly.clear();
+    if (sa.size() >= 3 && scratch.size() >= 3) {
+        poly = sa;
+        sec_b.swap(scratch); // B's hull in sec_b, scratch free for the clip
+        clip_convex_into(poly, sec_b, scratch);
     }
     double area2 = 0.0;
     Vec2 moment = Vec2::Zero();
     detail::accumulate_polygon(poly, area2, moment);
+    const bool has_patch = area2 > 2.0 * area_tol;
+
+    // Vertices of A n B: edges of each body clipped by the other's face planes. Read for the
+    // result's points and, without a patch, for the contact point: with point_only and a patch
+    // they are not needed and not computed.
+    // With the edge lists of the plane search, only the edges it kept: a dropped edge lies wholly
+    // outside one face plane of the other body, so its clip is empty anyway.
+    thread_local std::vector<Vec3> raw;
+    thread_local std::vector<Vec3> pts;
+    raw.clear();
+    pts.clear();
+    if (!point_only || !has_patch) {
+        const auto clip_a = [&](const std::array<int, 4>& e) {
+            clip_edge(fa.vertices[static_cast<std::size_t>(e[0])],
+                      fa.vertices[static_cast<std::size_t>(e[1])], r.nb, r.ob, raw);
+        };
+        const auto clip_b = [&](const std::array<int, 4>& e) {
+            clip_edge(r.vb[static_cast<std::size_t>(e[0])], r.vb[static_cast<std::size_t>(e[1])],
+                      fa.face_normals, fa.face_offsets, raw);
+        };
+        if (r.pruned) {
+            for (const int e : r.edges_a) {
+                clip_a(fa.edges[static_cast<std::size_t>(e)]);
+            }
+            for (const int e : r.edges_b) {
+                clip_b(fb.edges[static_cast<std::size_t>(e)]);
+            }
+        } else {
+            for (const auto& e : fa.edges) {
+                clip_a(e);
+            }
+            for (const auto& e : fb.edges) {
+                clip_b(e);
+            }
+        }
+        const double tol2 = 1e-24 * scale * scale;
+        for (const Vec3& p : raw) {
+            add_unique(pts, p, tol2);
+        }
+    }
+
     Vec3 point_a;
-    if (area2 > 2.0 * area_tol) {
+    if (has_patch) {
         const Vec2 cen = moment / (3.0 * area2);
         point_a = s * m + cen.x() * u + cen.y() * v;
         c.patch_area = 0.5 * area2;
@@ -397,7 +415,7 @@ PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b,
     for (const Vec3& p : pts) {
         c.points.emplace_back(a.x + a.q * p);
     }
-    if (area2 > 2.0 * area_tol) {
+    if (has_patch) {
         c.patch.reserve(poly.size());
         for (const Vec2& p : poly) {
             c.patch.emplace_back(a.x + a.q * (s * m + p.x() * u + p.y() * v));
