@@ -218,6 +218,8 @@ void System::build_member_pairs() {
         }
         return true;
     };
+    std::vector<std::uint32_t> near_a;
+    std::vector<std::uint32_t> near_b;
     for (const std::uint32_t k : body_entries_) {
         std::uint32_t a = owner[k];
         std::uint32_t b = nb[k];
@@ -229,8 +231,30 @@ void System::build_member_pairs() {
             member_keys_.push_back({p_.id[a], p_.id[b], -1, -1});
             continue;
         }
-        for (std::uint32_t ea = element_begin_[a]; ea < element_begin_[a + 1]; ++ea) {
-            for (std::uint32_t eb = element_begin_[b]; eb < element_begin_[b + 1]; ++eb) {
+        // Members of each side that can reach the other body at all: a member pair within the
+        // skin has |A - x_b| < r_A + skin + R_b (R_b: b's bounding radius, which covers every
+        // member's sphere), so members beyond that (widened by 1e-9 against round-off) pair with
+        // nothing. The pairs are those of the full double loop, in its order.
+        const auto near_members = [&](std::uint32_t i, std::uint32_t other,
+                                      std::vector<std::uint32_t>& out) {
+            out.clear();
+            const Vec3& xo = p_.x[other];
+            const double ro = p_.radius[other] + skin;
+            for (std::uint32_t e = element_begin_[i]; e < element_begin_[i + 1]; ++e) {
+                const MemberSphere& m = member_c_[e];
+                const double reach = (m.r + ro) * (1.0 + 1e-9);
+                if ((Vec3(m.x, m.y, m.z) - xo).squaredNorm() < reach * reach) {
+                    out.push_back(e);
+                }
+            }
+        };
+        near_members(a, b, near_a);
+        if (near_a.empty()) {
+            continue;
+        }
+        near_members(b, a, near_b);
+        for (const std::uint32_t ea : near_a) {
+            for (const std::uint32_t eb : near_b) {
                 const MemberSphere& A = member_c_[ea];
                 const MemberSphere& B = member_c_[eb];
                 const double reach = A.r + B.r + skin;
@@ -243,10 +267,19 @@ void System::build_member_pairs() {
             }
         }
     }
-    member_x_build_.resize(member_c_.size());
-    for (std::size_t e = 0; e < member_c_.size(); ++e) {
-        member_x_build_[e] = Vec3(member_c_[e].x, member_c_[e].y, member_c_[e].z);
+    body_x_build_.assign(p_.x.begin(), p_.x.end());
+    body_rot_build_.assign(rot_.begin(), rot_.end());
+    member_reach_.assign(p_.size(), 0.0);
+    for (std::size_t i = 0; i < p_.size(); ++i) {
+        const Vec3 x(p_.x[i]);
+        double far2 = 0.0;
+        for (std::uint32_t e = element_begin_[i]; e < element_begin_[i + 1]; ++e) {
+            far2 = std::max(
+                far2, (Vec3(member_c_[e].x, member_c_[e].y, member_c_[e].z) - x).squaredNorm());
+        }
+        member_reach_[i] = std::sqrt(far2);
     }
+    members_built_ = member_c_.size();
     member_shear_.assign(member_pairs_.size(), Vec3::Zero());
     member_force_.assign(member_pairs_.size(), Vec3::Zero());
     member_seen_.assign(member_pairs_.size(), -1);
@@ -282,19 +315,36 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
     // Elements of every particle, posed once per step: centre and radius of every element in
     // member_c_ (radius 0: not a sphere), the full Element in elements_ only for superquadrics
     // and polyhedra (the slots of sphere elements are not written: element() builds those).
-    member_c_.clear();
-    element_begin_.assign(p_.size() + 1, 0);
+    // The element ranges first (a clump has one element per sphere, any other particle one),
+    // then the elements written in place: member_c_ keeps its size from step to step, so it is
+    // neither cleared nor filled (a push_back per member was most of a clump scene's posing).
+    element_begin_.resize(p_.size() + 1);
+    {
+        std::size_t total = 0;
+        for (std::size_t i = 0; i < p_.size(); ++i) {
+            element_begin_[i] = static_cast<std::uint32_t>(total);
+            const geometry::ShapeTemplate* t = tmpl(static_cast<std::uint32_t>(i));
+            const auto* c = t != nullptr ? std::get_if<geometry::Clump>(&t->shape) : nullptr;
+            total += c != nullptr ? c->spheres.size() : 1;
+        }
+        element_begin_[p_.size()] = static_cast<std::uint32_t>(total);
+        member_c_.resize(total);
+    }
     for (std::size_t i = 0; i < p_.size(); ++i) {
-        element_begin_[i] = static_cast<std::uint32_t>(member_c_.size());
+        const std::size_t e0 = element_begin_[i];
+        MemberSphere* out = member_c_.data() + e0;
         const geometry::ShapeTemplate* t = tmpl(static_cast<std::uint32_t>(i));
         if (t == nullptr) { // a sphere
-            member_c_.push_back({p_.x[i].x(), p_.x[i].y(), p_.x[i].z(), p_.radius[i]});
+            out[0] = {p_.x[i].x(), p_.x[i].y(), p_.x[i].z(), p_.radius[i]};
             continue;
         }
         if (const auto* c = std::get_if<geometry::Clump>(&t->shape)) { // as append_elements
-            for (const geometry::ClumpSphere& cs : c->spheres) {
-                const Vec3 centre = p_.x[i] + rot_[i] * cs.centre;
-                member_c_.push_back({centre.x(), centre.y(), centre.z(), cs.radius});
+            const Vec3 x = p_.x[i];
+            const Mat3& rot = rot_[i];
+            for (std::size_t j = 0; j < c->spheres.size(); ++j) {
+                const geometry::ClumpSphere& cs = c->spheres[j];
+                const Vec3 centre = x + rot * cs.centre;
+                out[j] = {centre.x(), centre.y(), centre.z(), cs.radius};
             }
             continue;
         }
@@ -304,20 +354,19 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 : nullptr;
         pose_buf_.clear();
         append_elements(t, features, p_.x[i], p_.q[i], rot_[i], p_.radius[i], pose_buf_);
-        for (const Element& E : pose_buf_) {
-            const bool sphere = E.kind == Element::Kind::sphere;
-            const std::size_t e = member_c_.size();
-            member_c_.push_back(
-                {E.centre.x(), E.centre.y(), E.centre.z(), sphere ? E.radius : 0.0});
-            if (!sphere) {
-                if (elements_.size() <= e) {
-                    elements_.resize(e + 1);
-                }
-                elements_[e] = E;
+        if (pose_buf_.size() != 1) {
+            throw std::logic_error("body_forces: a particle that is not a clump has one element");
+        }
+        const Element& E = pose_buf_[0];
+        const bool sphere = E.kind == Element::Kind::sphere;
+        out[0] = {E.centre.x(), E.centre.y(), E.centre.z(), sphere ? E.radius : 0.0};
+        if (!sphere) {
+            if (elements_.size() <= e0) {
+                elements_.resize(e0 + 1);
             }
+            elements_[e0] = E;
         }
     }
-    element_begin_[p_.size()] = static_cast<std::uint32_t>(member_c_.size());
     // travel_ brought up to this pose (system.hpp), in a loop of its own over the bodies (inside
     // the posing loop above its chain of operations waited on that loop's branches). Only
     // polyhedra read it: travel_r_ is 0 for the other bodies.
@@ -875,20 +924,24 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // b): the same contacts, the same evaluation order and so the same bits, without the
             // per-step bounding-sphere search inside each clump pair. A touching pair of sphere
             // elements implies the bounding-sphere tests the general route makes.
-            bool moved = !members_valid_ || member_x_build_.size() != member_c_.size();
-            if (!moved) { // largest squared displacement, without an early exit (vector lanes)
-                const double half_skin2 = 0.25 * nl_.skin() * nl_.skin();
-                const MemberSphere* c = member_c_.data();
-                const Vec3* x0 = member_x_build_.data();
+            // Rebuilt when an element may have moved by more than half the skin. Per particle, a
+            // bound of its elements' displacements: |dx| + |R - R0|_F r (the Frobenius norm
+            // bounds the spectral one; r: the farthest element centre), widened by 1e-9 against
+            // round-off. (A pass over every element, a tenth of a clump run, took the exact
+            // largest; the bound rebuilds a little earlier at most, and the list's touching pairs
+            // and their order, hence the numbers, do not depend on when it is rebuilt.)
+            bool moved = !members_valid_ || members_built_ != member_c_.size() ||
+                         body_x_build_.size() != p_.size();
+            if (!moved) {
                 double worst = 0.0;
-#pragma omp simd reduction(max : worst)
-                for (std::size_t e = 0; e < member_c_.size(); ++e) {
-                    const double d0 = c[e].x - x0[e].x();
-                    const double d1 = c[e].y - x0[e].y();
-                    const double d2 = c[e].z - x0[e].z();
-                    worst = std::max(worst, d0 * d0 + d1 * d1 + d2 * d2);
+                for (std::size_t i = 0; i < p_.size(); ++i) {
+                    double d = (p_.x[i] - body_x_build_[i]).norm();
+                    if (member_reach_[i] > 0.0) {
+                        d += (rot_[i] - body_rot_build_[i]).norm() * member_reach_[i];
+                    }
+                    worst = std::max(worst, d);
                 }
-                moved = worst > half_skin2;
+                moved = worst * (1.0 + 1e-9) > 0.5 * nl_.skin();
             }
             if (moved) {
                 // The histories of the old member pairs go into the table (keyed), where this
