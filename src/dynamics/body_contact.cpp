@@ -638,8 +638,8 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
     }
     if (const auto* c = std::get_if<geometry::Clump>(&t->shape)) {
         for (const geometry::ClumpSphere& s : c->spheres) {
-            out.push_back({Element::Kind::sphere, x + rot * s.centre, s.radius, nullptr,
-                           Quat::Identity(), s.radius});
+            out.push_back({Element::Kind::sphere, member_centre(x, rot, s.centre), s.radius,
+                           nullptr, Quat::Identity(), s.radius});
         }
         return;
     }

@@ -17,6 +17,7 @@
 #include "geometry/polyhedron_contact.hpp"
 #include "geometry/shape.hpp"
 
+#include <cmath>
 #include <compare>
 #include <cstdint>
 #include <vector>
@@ -87,6 +88,17 @@ struct NarrowPhaseCounters {
     long fallbacks = 0; ///< the first method did not converge, a second answered (see fell_back)
     long failures = 0;  ///< no method converged: the contact was skipped for that step
 };
+
+/// World centre x + R c (m) of a clump member at c (m, body frame) of a particle at x with R =
+/// `rot` (body -> world). Written out, so every place that poses members gets the same bits: rows
+/// 0 and 1 as R_r0 c_0, then fused R_r1 c_1 and R_r2 c_2; row 2 as R_21 c_1, then fused R_22 c_2
+/// and R_20 c_0; then + x (the order GCC gave Eigen's `x + rot * c` in these loops before, so the
+/// numbers did not change when it was written out).
+inline Vec3 member_centre(const Vec3& x, const Mat3& rot, const Vec3& c) {
+    return {x.x() + std::fma(rot(0, 2), c.z(), std::fma(rot(0, 1), c.y(), rot(0, 0) * c.x())),
+            x.y() + std::fma(rot(1, 2), c.z(), std::fma(rot(1, 1), c.y(), rot(1, 0) * c.x())),
+            x.z() + std::fma(rot(2, 0), c.x(), std::fma(rot(2, 2), c.z(), rot(2, 1) * c.y()))};
+}
 
 /// Appends the elements of a particle (centre x, orientation q, radius r) of template t (nullptr:
 /// a sphere) to `out`. A polyhedron template needs the overload with its features.

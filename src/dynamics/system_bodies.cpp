@@ -339,12 +339,13 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             continue;
         }
         if (const auto* c = std::get_if<geometry::Clump>(&t->shape)) { // as append_elements
+            // member_centre (body_contact.hpp) in place, without Eigen's temporaries.
             const Vec3 x = p_.x[i];
             const Mat3& rot = rot_[i];
+            const geometry::ClumpSphere* src = c->spheres.data();
             for (std::size_t j = 0; j < c->spheres.size(); ++j) {
-                const geometry::ClumpSphere& cs = c->spheres[j];
-                const Vec3 centre = x + rot * cs.centre;
-                out[j] = {centre.x(), centre.y(), centre.z(), cs.radius};
+                const Vec3 centre = member_centre(x, rot, src[j].centre);
+                out[j] = {centre.x(), centre.y(), centre.z(), src[j].radius};
             }
             continue;
         }
