@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# Cost per contact of each particle shape against a sphere contact (issue 6 target: "within 10x
+# of a sphere contact for the shapes the seed uses"), in the two phases of the lattice scene of
+# bench/lattice_scene.hpp (343 particles of about 6 mm collapsing into a box):
+#   collapse: steps 4000-8000 (few contacts per body, many near misses),
+#   settled:  steps 16000-20000 (a resting pile).
+# The cost is the process CPU time of the whole step divided by its element contacts (particle and
+# wall contacts; build/bench/kiln_scene_steps), so a sphere contact carries the same overheads as
+# the others. Rounds go through every shape in turn, so a busy spell of the host touches all of
+# them alike; the table gives the median over the rounds (the sphere runs three times per round)
+# and the ratio of the medians to the sphere's median in the same phase, with the range of that
+# ratio over the sphere's fastest and slowest runs.
+#
+# Usage: bench/contact_ratios.sh [ROUNDS [KIND...]]  (default 3 rounds; kinds: sphere, the clumps
+# cylinder_12 and cylinder_36, the polyhedra cube, icosahedron and cylinder_16; any shipped shape
+# name or sq08/sq03 works). Needs a Release build with benchmarks (scripts/setup.sh), or
+# KILN_SCENE_STEPS pointing at a kiln_scene_steps binary. Figures: docs/performance.md.
+set -euo pipefail
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+bin=${KILN_SCENE_STEPS:-"$here/build/bench/kiln_scene_steps"}
+[[ -x $bin ]] || {
+    echo "bench/contact_ratios.sh: no kiln_scene_steps at $bin (build with -DKILN_BUILD_BENCH=ON)" >&2
+    exit 1
+}
+rounds=${1:-3}
+[[ $rounds =~ ^[1-9][0-9]*$ ]] || {
+    echo "bench/contact_ratios.sh: ROUNDS must be a positive integer, got '$rounds'" >&2
+    exit 2
+}
+shift || true
+kinds=("$@")
+((${#kinds[@]} > 0)) || kinds=(sphere cylinder_12 cylinder_36 cube icosahedron cylinder_16)
+[[ " ${kinds[*]} " == *" sphere "* ]] || kinds=(sphere "${kinds[@]}")
+
+out=$(mktemp)
+trap 'rm -f "$out"' EXIT
+echo "# $(date -u '+%Y-%m-%d %H:%M:%S UTC'), $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg)"
+for r in $(seq 1 "$rounds"); do
+    for phase in collapse settled; do
+        if [[ $phase == collapse ]]; then warm=4000; else warm=16000; fi
+        for k in "${kinds[@]}"; do
+            # The sphere scene times only ~40 ms per run, so its runs scatter most; as the
+            # denominator of every ratio it runs three times per round.
+            repeats=1
+            [[ $k == sphere ]] && repeats=3
+            for _ in $(seq 1 $repeats); do
+                line=$("$bin" "$k" "$warm" 4000 2>/dev/null) || {
+                    echo "bench/contact_ratios.sh: kiln_scene_steps $k failed" >&2
+                    exit 1
+                }
+                # kind cpu_ms_per_step X contacts_per_particle Y cpu_ns_per_contact Z checksum C
+                read -r _ _ ms _ cpp _ ns _ <<<"$line"
+                echo "$r $phase $k $ms $cpp $ns" >>"$out"
+            done
+        done
+    done
+    echo "# round $r of $rounds done, load $(cut -d' ' -f1 /proc/loadavg)" >&2
+done
+
+python3 - "$out" <<'EOF'
+import collections
+import statistics
+import sys
+
+rows = collections.defaultdict(list)
+order = []
+for line in open(sys.argv[1]):
+    r, phase, kind, ms, cpp, ns = line.split()
+    if kind not in order:
+        order.append(kind)
+    rows[(phase, kind)].append((float(ns), float(cpp), float(ms)))
+print("| phase | shape | contacts per particle | us per step | ns per contact: median (range) "
+      "| x a sphere contact (range) |")
+print("|---|---|---|---|---|---|")
+for phase in ("collapse", "settled"):
+    ref_runs = [v[0] for v in rows[(phase, "sphere")]]
+    ref = statistics.median(ref_runs)
+    for kind in order:
+        v = rows[(phase, kind)]
+        ns = [x[0] for x in v]
+        med = statistics.median(ns)
+        print(f"| {phase} | {kind} | {statistics.median(x[1] for x in v):.2f} "
+              f"| {1e3 * statistics.median(x[2] for x in v):.1f} "
+              f"| {med:.1f} ({min(ns):.1f}-{max(ns):.1f}) | {med / ref:.1f} "
+              f"({med / max(ref_runs):.1f}-{med / min(ref_runs):.1f}) |")
+EOF
