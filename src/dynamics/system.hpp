@@ -412,9 +412,10 @@ class System {
     bool members_from_table_ = true;
     mutable std::vector<BodyContactEntry> contacts_view_; // body_contacts(), built on demand
     mutable bool view_valid_ = false;
-    // When member_pairs_ was built: each particle's centre (m, world) and R(q) (rot_), the
-    // farthest element centre from the particle's centre (m; 0 for one element), and the number
-    // of elements. Bound the elements' displacements since then (body_forces' rebuild test).
+    // When member_pairs_ was built: the element centres (m, world), each particle's centre (m,
+    // world) and R(q) (rot_), the farthest element centre from the particle's centre (m; 0 for
+    // one element), and the number of elements (body_forces' rebuild test).
+    std::vector<Vec3> member_x_build_;
     std::vector<Vec3> body_x_build_;
     std::vector<Mat3> body_rot_build_;
     std::vector<double> member_reach_;

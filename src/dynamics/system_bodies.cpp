@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <utility>
 #include <vector>
 
@@ -248,11 +249,20 @@ void System::build_member_pairs() {
                 }
             }
         };
-        near_members(a, b, near_a);
-        if (near_a.empty()) {
-            continue;
+        const std::uint32_t na = element_begin_[a + 1] - element_begin_[a];
+        const std::uint32_t nb_e = element_begin_[b + 1] - element_begin_[b];
+        if (na * nb_e > 2 * (na + nb_e)) { // the pre-selection pays (not for dimers: 4 vs 8)
+            near_members(a, b, near_a);
+            if (near_a.empty()) {
+                continue;
+            }
+            near_members(b, a, near_b);
+        } else {
+            near_a.resize(na);
+            std::iota(near_a.begin(), near_a.end(), element_begin_[a]);
+            near_b.resize(nb_e);
+            std::iota(near_b.begin(), near_b.end(), element_begin_[b]);
         }
-        near_members(b, a, near_b);
         for (const std::uint32_t ea : near_a) {
             for (const std::uint32_t eb : near_b) {
                 const MemberSphere& A = member_c_[ea];
@@ -266,6 +276,10 @@ void System::build_member_pairs() {
                 }
             }
         }
+    }
+    member_x_build_.resize(member_c_.size());
+    for (std::size_t e = 0; e < member_c_.size(); ++e) {
+        member_x_build_[e] = Vec3(member_c_[e].x, member_c_[e].y, member_c_[e].z);
     }
     body_x_build_.assign(p_.x.begin(), p_.x.end());
     body_rot_build_.assign(rot_.begin(), rot_.end());
@@ -315,30 +329,29 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
     // Elements of every particle, posed once per step: centre and radius of every element in
     // member_c_ (radius 0: not a sphere), the full Element in elements_ only for superquadrics
     // and polyhedra (the slots of sphere elements are not written: element() builds those).
-    // The element ranges first (a clump has one element per sphere, any other particle one),
-    // then the elements written in place: member_c_ keeps its size from step to step, so it is
-    // neither cleared nor filled (a push_back per member was most of a clump scene's posing).
+    // The elements are written in place at a running index: member_c_ keeps its size from step
+    // to step (it only grows, when particles are added), so it is neither cleared nor filled (a
+    // push_back per member was most of a clump scene's posing).
     element_begin_.resize(p_.size() + 1);
-    {
-        std::size_t total = 0;
-        for (std::size_t i = 0; i < p_.size(); ++i) {
-            element_begin_[i] = static_cast<std::uint32_t>(total);
-            const geometry::ShapeTemplate* t = tmpl(static_cast<std::uint32_t>(i));
-            const auto* c = t != nullptr ? std::get_if<geometry::Clump>(&t->shape) : nullptr;
-            total += c != nullptr ? c->spheres.size() : 1;
+    std::size_t n_elements = 0;
+    const auto room = [&](std::size_t n) {
+        if (member_c_.size() < n_elements + n) {
+            member_c_.resize(n_elements + n);
         }
-        element_begin_[p_.size()] = static_cast<std::uint32_t>(total);
-        member_c_.resize(total);
-    }
+        return member_c_.data() + n_elements;
+    };
     for (std::size_t i = 0; i < p_.size(); ++i) {
-        const std::size_t e0 = element_begin_[i];
-        MemberSphere* out = member_c_.data() + e0;
+        const std::size_t e0 = n_elements;
+        element_begin_[i] = static_cast<std::uint32_t>(e0);
         const geometry::ShapeTemplate* t = tmpl(static_cast<std::uint32_t>(i));
         if (t == nullptr) { // a sphere
-            out[0] = {p_.x[i].x(), p_.x[i].y(), p_.x[i].z(), p_.radius[i]};
+            *room(1) = {p_.x[i].x(), p_.x[i].y(), p_.x[i].z(), p_.radius[i]};
+            ++n_elements;
             continue;
         }
         if (const auto* c = std::get_if<geometry::Clump>(&t->shape)) { // as append_elements
+            MemberSphere* out = room(c->spheres.size());
+            n_elements += c->spheres.size();
             // member_centre (body_contact.hpp) in place, without Eigen's temporaries.
             const Vec3 x = p_.x[i];
             const Mat3& rot = rot_[i];
@@ -360,7 +373,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
         }
         const Element& E = pose_buf_[0];
         const bool sphere = E.kind == Element::Kind::sphere;
-        out[0] = {E.centre.x(), E.centre.y(), E.centre.z(), sphere ? E.radius : 0.0};
+        *room(1) = {E.centre.x(), E.centre.y(), E.centre.z(), sphere ? E.radius : 0.0};
+        ++n_elements;
         if (!sphere) {
             if (elements_.size() <= e0) {
                 elements_.resize(e0 + 1);
@@ -368,6 +382,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             elements_[e0] = E;
         }
     }
+    element_begin_[p_.size()] = static_cast<std::uint32_t>(n_elements);
+    member_c_.resize(n_elements);
     // travel_ brought up to this pose (system.hpp), in a loop of its own over the bodies (inside
     // the posing loop above its chain of operations waited on that loop's branches). Only
     // polyhedra read it: travel_r_ is 0 for the other bodies.
@@ -925,24 +941,48 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // b): the same contacts, the same evaluation order and so the same bits, without the
             // per-step bounding-sphere search inside each clump pair. A touching pair of sphere
             // elements implies the bounding-sphere tests the general route makes.
-            // Rebuilt when an element may have moved by more than half the skin. Per particle, a
-            // bound of its elements' displacements: |dx| + |R - R0|_F r (the Frobenius norm
-            // bounds the spectral one; r: the farthest element centre), widened by 1e-9 against
-            // round-off. (A pass over every element, a tenth of a clump run, took the exact
-            // largest; the bound rebuilds a little earlier at most, and the list's touching pairs
-            // and their order, hence the numbers, do not depend on when it is rebuilt.)
+            // Rebuilt when an element has moved by more than half the skin since the member
+            // build. With more than four elements per particle on average, per particle first a
+            // bound of its elements' displacements, |dx| + |R - R0|_2 r (r: its farthest
+            // element centre), widened by 1e-9, and only a particle whose bound passes half the
+            // skin has its elements' displacements taken: the test reads two poses per particle,
+            // not every element (a pass over every element was a tenth of a 36-sphere clump
+            // run), and answers as that pass does. With fewer, the pass is the cheaper.
             bool moved = !members_valid_ || members_built_ != member_c_.size() ||
                          body_x_build_.size() != p_.size();
-            if (!moved) {
+            const double quarter = 0.25 * nl_.skin() * nl_.skin();
+            // The displacements of elements [e0, e1): does one pass half the skin? (Without an
+            // early exit: vector lanes.)
+            const auto beyond = [&](std::size_t e0, std::size_t e1) {
+                const MemberSphere* c = member_c_.data();
+                const Vec3* x0 = member_x_build_.data();
                 double worst = 0.0;
-                for (std::size_t i = 0; i < p_.size(); ++i) {
+#pragma omp simd reduction(max : worst)
+                for (std::size_t e = e0; e < e1; ++e) {
+                    const double d0 = c[e].x - x0[e].x();
+                    const double d1 = c[e].y - x0[e].y();
+                    const double d2 = c[e].z - x0[e].z();
+                    worst = std::max(worst, d0 * d0 + d1 * d1 + d2 * d2);
+                }
+                return worst > quarter;
+            };
+            if (!moved && member_c_.size() <= 4 * p_.size()) {
+                moved = beyond(0, member_c_.size()); // few elements per particle: all of them
+            } else if (!moved) {
+                const double half = 0.5 * nl_.skin();
+                for (std::size_t i = 0; i < p_.size() && !moved; ++i) {
                     double d = (p_.x[i] - body_x_build_[i]).norm();
                     if (member_reach_[i] > 0.0) {
-                        d += (rot_[i] - body_rot_build_[i]).norm() * member_reach_[i];
+                        // |R - R0|_2 = |R - R0|_F / sqrt(2) for two rotations (R0^T R - I has
+                        // the singular values 2 sin(theta/2) twice and 0); 1e-12 for matrices
+                        // orthogonal to round-off only.
+                        d += ((rot_[i] - body_rot_build_[i]).norm() * std::sqrt(0.5) + 1e-12) *
+                             member_reach_[i];
                     }
-                    worst = std::max(worst, d);
+                    if (d * (1.0 + 1e-9) > half) {
+                        moved = beyond(element_begin_[i], element_begin_[i + 1]);
+                    }
                 }
-                moved = worst * (1.0 + 1e-9) > 0.5 * nl_.skin();
             }
             if (moved) {
                 // The histories of the old member pairs go into the table (keyed), where this
