@@ -5,6 +5,9 @@
 
 #include "geometry/separating_axis.hpp"
 
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -616,6 +619,65 @@ double polyhedra_separation_margin(const Element& a, const Element& b) {
 
 double equivalent_radius(const geometry::ShapeTemplate& t) {
     return std::cbrt(3.0 * t.volume / (4.0 * std::numbers::pi));
+}
+
+void pose_members(const Vec3& x, const Mat3& rot, const geometry::ClumpSphere* src, std::size_t n,
+                  double* out) {
+    static_assert(sizeof(geometry::ClumpSphere) == 4 * sizeof(double),
+                  "a member is four packed doubles: centre and radius");
+    std::size_t j = 0;
+#if defined(__AVX512F__)
+    const auto* in = reinterpret_cast<const double*>(src);
+    const __m512i lo = _mm512_setr_epi64(0, 4, 8, 12, 1, 5, 9, 13);
+    const __m512i hi = _mm512_setr_epi64(2, 6, 10, 14, 3, 7, 11, 15);
+    const __m512i first = _mm512_setr_epi64(0, 1, 2, 3, 8, 9, 10, 11);
+    const __m512i second = _mm512_setr_epi64(4, 5, 6, 7, 12, 13, 14, 15);
+    const __m512d r00 = _mm512_set1_pd(rot(0, 0)), r01 = _mm512_set1_pd(rot(0, 1)),
+                  r02 = _mm512_set1_pd(rot(0, 2)), r10 = _mm512_set1_pd(rot(1, 0)),
+                  r11 = _mm512_set1_pd(rot(1, 1)), r12 = _mm512_set1_pd(rot(1, 2)),
+                  r20 = _mm512_set1_pd(rot(2, 0)), r21 = _mm512_set1_pd(rot(2, 1)),
+                  r22 = _mm512_set1_pd(rot(2, 2));
+    const __m512d bx = _mm512_set1_pd(x.x()), by = _mm512_set1_pd(x.y()),
+                  bz = _mm512_set1_pd(x.z());
+    for (; j + 8 <= n; j += 8) {
+        const double* p = in + 4 * j;
+        const __m512d m01 = _mm512_loadu_pd(p);                    // x0 y0 z0 r0 x1 y1 z1 r1
+        const __m512d m23 = _mm512_loadu_pd(p + 8);                // members 2, 3
+        const __m512d m45 = _mm512_loadu_pd(p + 16);               // members 4, 5
+        const __m512d m67 = _mm512_loadu_pd(p + 24);               // members 6, 7
+        const __m512d xy03 = _mm512_permutex2var_pd(m01, lo, m23); // x0..x3 y0..y3
+        const __m512d zr03 = _mm512_permutex2var_pd(m01, hi, m23); // z0..z3 r0..r3
+        const __m512d xy47 = _mm512_permutex2var_pd(m45, lo, m67);
+        const __m512d zr47 = _mm512_permutex2var_pd(m45, hi, m67);
+        const __m512d cx = _mm512_permutex2var_pd(xy03, first, xy47);
+        const __m512d cy = _mm512_permutex2var_pd(xy03, second, xy47);
+        const __m512d cz = _mm512_permutex2var_pd(zr03, first, zr47);
+        const __m512d cr = _mm512_permutex2var_pd(zr03, second, zr47);
+        // member_centre's operations, in its order
+        const __m512d ox = _mm512_add_pd(
+            bx, _mm512_fmadd_pd(r02, cz, _mm512_fmadd_pd(r01, cy, _mm512_mul_pd(r00, cx))));
+        const __m512d oy = _mm512_add_pd(
+            by, _mm512_fmadd_pd(r12, cz, _mm512_fmadd_pd(r11, cy, _mm512_mul_pd(r10, cx))));
+        const __m512d oz = _mm512_add_pd(
+            bz, _mm512_fmadd_pd(r20, cx, _mm512_fmadd_pd(r22, cz, _mm512_mul_pd(r21, cy))));
+        const __m512d oxy03 = _mm512_permutex2var_pd(ox, first, oy); // x0..x3 y0..y3
+        const __m512d oxy47 = _mm512_permutex2var_pd(ox, second, oy);
+        const __m512d ozr03 = _mm512_permutex2var_pd(oz, first, cr); // z0..z3 r0..r3
+        const __m512d ozr47 = _mm512_permutex2var_pd(oz, second, cr);
+        double* q = out + 4 * j;
+        _mm512_storeu_pd(q, _mm512_permutex2var_pd(oxy03, lo, ozr03));
+        _mm512_storeu_pd(q + 8, _mm512_permutex2var_pd(oxy03, hi, ozr03));
+        _mm512_storeu_pd(q + 16, _mm512_permutex2var_pd(oxy47, lo, ozr47));
+        _mm512_storeu_pd(q + 24, _mm512_permutex2var_pd(oxy47, hi, ozr47));
+    }
+#endif
+    for (; j < n; ++j) {
+        const Vec3 c = member_centre(x, rot, src[j].centre);
+        out[4 * j] = c.x();
+        out[4 * j + 1] = c.y();
+        out[4 * j + 2] = c.z();
+        out[4 * j + 3] = src[j].radius;
+    }
 }
 
 void append_elements(const geometry::ShapeTemplate* t, const Vec3& x, const Quat& q, double r,

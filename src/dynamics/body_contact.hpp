@@ -100,6 +100,14 @@ inline Vec3 member_centre(const Vec3& x, const Mat3& rot, const Vec3& c) {
             x.z() + std::fma(rot(2, 0), c.x(), std::fma(rot(2, 2), c.z(), rot(2, 1) * c.y()))};
 }
 
+/// World records (x, y, z, r), four doubles each, into `out`, of the n members `src` of a clump at
+/// x with R = `rot` (body -> world): centre member_centre(x, rot, c) (m, world), radius r (m).
+/// With AVX-512, eight members at a time: the records turned into one register per component,
+/// member_centre's operations lane by lane (so the same bits), and turned back into records
+/// (GCC's own vector loop stored every double alone).
+void pose_members(const Vec3& x, const Mat3& rot, const geometry::ClumpSphere* src, std::size_t n,
+                  double* out);
+
 /// Appends the elements of a particle (centre x, orientation q, radius r) of template t (nullptr:
 /// a sphere) to `out`. A polyhedron template needs the overload with its features.
 void append_elements(const geometry::ShapeTemplate* t, const Vec3& x, const Quat& q, double r,

@@ -25,6 +25,35 @@ using test::momentum;
 using test::shape;
 using test::superquadric;
 
+// The members posed in vector lanes are member_centre's numbers, bit for bit, for any count
+// (whole groups of eight and the rest) and any pose.
+TEST(Bodies, PosedMembersAreMemberCentreBitForBit) {
+    std::vector<geometry::ClumpSphere> spheres;
+    for (int j = 0; j < 21; ++j) {
+        const double t = 0.37 * j;
+        spheres.push_back({Vec3(1e-3 * std::cos(t), 2e-3 * std::sin(1.3 * t), 0.5e-3 * j - 4e-3),
+                           (1.0 + 0.01 * j) * 1e-3});
+    }
+    const Quat q = Quat(0.3, -0.5, 0.7, 0.2).normalized();
+    const Mat3 rot = geometry::unit_rotation_matrix(q);
+    const Vec3 x(0.0123, -0.045, 0.2071);
+    for (std::size_t n = 0; n <= spheres.size(); ++n) {
+        std::vector<double> out(4 * n + 4, -1.0); // one record past the end stays untouched
+        pose_members(x, rot, spheres.data(), n, out.data());
+        for (std::size_t j = 0; j < n; ++j) {
+            const Vec3 c = member_centre(x, rot, spheres[j].centre);
+            EXPECT_EQ(out[4 * j], c.x()) << n << " members, member " << j;
+            EXPECT_EQ(out[4 * j + 1], c.y()) << n << " members, member " << j;
+            EXPECT_EQ(out[4 * j + 2], c.z()) << n << " members, member " << j;
+            EXPECT_EQ(out[4 * j + 3], spheres[j].radius) << n << " members, member " << j;
+            EXPECT_LT((c - (x + rot * spheres[j].centre)).norm(), 1e-15);
+        }
+        for (std::size_t k = 4 * n; k < out.size(); ++k) {
+            EXPECT_EQ(out[k], -1.0) << n << " members: written past the end";
+        }
+    }
+}
+
 TEST(Bodies, FreeAsymmetricBodyKeepsAngularMomentumAndEnergy) {
     SceneSpec s = base_scene();
     s.gravity.setZero();
