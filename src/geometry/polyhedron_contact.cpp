@@ -329,21 +329,18 @@ PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b,
 
     // Patch: section of A by the CP clipped by the section of B. (Per-thread buffers: a resting
     // face-on-face pair builds it every step.)
-    thread_local std::vector<Vec2> sec_a;
-    thread_local std::vector<Vec2> sec_b;
-    thread_local std::vector<Vec2> sa;
-    thread_local std::vector<Vec2> poly;
-    thread_local std::vector<Vec2> scratch;
+    thread_local std::vector<Vec2> section; // a section's points, then the clip's scratch
+    thread_local std::vector<Vec2> poly;    // A's hull, clipped to the patch
+    thread_local std::vector<Vec2> hull_b;
     const double area_tol = 1e-24 * scale * scale;
-    section_into(fa.vertices, fa.edges, m, s, u, v, sec_a);
-    hull_2d_into(sec_a, area_tol, sa);
-    section_into(r.vb, fb.edges, m, s, u, v, sec_b);
-    hull_2d_into(sec_b, area_tol, scratch);
-    poly.clear();
-    if (sa.size() >= 3 && scratch.size() >= 3) {
-        poly = sa;
-        sec_b.swap(scratch); // B's hull in sec_b, scratch free for the clip
-        clip_convex_into(poly, sec_b, scratch);
+    section_into(fa.vertices, fa.edges, m, s, u, v, section);
+    hull_2d_into(section, area_tol, poly);
+    section_into(r.vb, fb.edges, m, s, u, v, section);
+    hull_2d_into(section, area_tol, hull_b);
+    if (poly.size() >= 3 && hull_b.size() >= 3) {
+        clip_convex_into(poly, hull_b, section);
+    } else {
+        poly.clear();
     }
     double area2 = 0.0;
     Vec2 moment = Vec2::Zero();
