@@ -413,13 +413,12 @@ class System {
     mutable std::vector<BodyContactEntry> contacts_view_; // body_contacts(), built on demand
     mutable bool view_valid_ = false;
     // When member_pairs_ was built: the element centres (m, world), each particle's centre (m,
-    // world) and R(q) (rot_), the farthest element centre from the particle's centre (m; 0 for
-    // one element), and the number of elements (body_forces' rebuild test).
+    // world) and R(q) (rot_), and the farthest element centre from the particle's centre (m; 0
+    // for one element) (body_forces' rebuild test).
     std::vector<Vec3> member_x_build_;
     std::vector<Vec3> body_x_build_;
     std::vector<Mat3> body_rot_build_;
     std::vector<double> member_reach_;
-    std::size_t members_built_ = 0;
     bool members_valid_ = false;
     void build_member_pairs();
     // Walls within the skin of each body at the last list build: those of bodies_[b] are

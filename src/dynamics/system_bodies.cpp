@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -277,23 +278,20 @@ void System::build_member_pairs() {
             }
         }
     }
+    // The poses of this build, for body_forces' rebuild test: every element centre, and per
+    // particle its centre, R and farthest element centre.
     member_x_build_.resize(member_c_.size());
-    for (std::size_t e = 0; e < member_c_.size(); ++e) {
-        member_x_build_[e] = Vec3(member_c_[e].x, member_c_[e].y, member_c_[e].z);
-    }
     body_x_build_.assign(p_.x.begin(), p_.x.end());
     body_rot_build_.assign(rot_.begin(), rot_.end());
     member_reach_.assign(p_.size(), 0.0);
     for (std::size_t i = 0; i < p_.size(); ++i) {
-        const Vec3 x(p_.x[i]);
         double far2 = 0.0;
         for (std::uint32_t e = element_begin_[i]; e < element_begin_[i + 1]; ++e) {
-            far2 = std::max(
-                far2, (Vec3(member_c_[e].x, member_c_[e].y, member_c_[e].z) - x).squaredNorm());
+            member_x_build_[e] = Vec3(member_c_[e].x, member_c_[e].y, member_c_[e].z);
+            far2 = std::max(far2, (member_x_build_[e] - p_.x[i]).squaredNorm());
         }
         member_reach_[i] = std::sqrt(far2);
     }
-    members_built_ = member_c_.size();
     member_shear_.assign(member_pairs_.size(), Vec3::Zero());
     member_force_.assign(member_pairs_.size(), Vec3::Zero());
     member_seen_.assign(member_pairs_.size(), -1);
@@ -943,7 +941,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // skin has its elements' displacements taken: the test reads two poses per particle,
             // not every element (a pass over every element was a tenth of a 36-sphere clump
             // run), and answers as that pass does. With fewer, the pass is the cheaper.
-            bool moved = !members_valid_ || members_built_ != member_c_.size() ||
+            bool moved = !members_valid_ || member_x_build_.size() != member_c_.size() ||
                          body_x_build_.size() != p_.size();
             const double quarter = 0.25 * nl_.skin() * nl_.skin();
             // The displacements of elements [e0, e1): does one pass half the skin? (Without an
