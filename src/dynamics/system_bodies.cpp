@@ -1141,7 +1141,31 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         continue;
                     }
                     const std::uint32_t a0 = element_begin_[a];
-                    for (std::uint32_t ea = a0; ea < element_begin_[a + 1]; ++ea) {
+                    const std::uint32_t n_el = element_begin_[a + 1] - a0;
+                    // The elements that may touch the wall, in order, from one pass without
+                    // branches: every element that is not a sphere, and the sphere elements
+                    // closer to touching than 1e-9 of their radius (far above the round-off of
+                    // the overlap). The exact test below decides; this one only drops the
+                    // members clearly apart, where a branch per member of a clump was
+                    // mispredicted often.
+                    wall_hits_.resize(n_el);
+                    std::size_t n_wh = 0;
+                    std::visit(
+                        [&](const auto& s) {
+                            const MemberSphere* mc = member_c_.data() + a0;
+                            std::uint32_t* hits = wall_hits_.data();
+                            for (std::uint32_t j = 0; j < n_el; ++j) {
+                                const double ov =
+                                    wall_contact(s, Vec3(mc[j].x, mc[j].y, mc[j].z), mc[j].r)
+                                        .overlap;
+                                const bool near = !(mc[j].r > 0.0) || ov > -1e-9 * mc[j].r;
+                                hits[n_wh] = a0 + j;
+                                n_wh += static_cast<std::size_t>(near);
+                            }
+                        },
+                        ws);
+                    for (std::size_t h = 0; h < n_wh; ++h) {
+                        const std::uint32_t ea = wall_hits_[h];
                         const BodyContactKey key{p_.id[a], -1 - static_cast<std::int64_t>(w),
                                                  static_cast<std::int32_t>(ea - a0), 0};
                         const ContactGroup g{1, a, static_cast<std::uint32_t>(w), ea - a0};
