@@ -8,11 +8,13 @@
 #include "geometry/rotation.hpp"
 #include "io/shape_reader.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <gtest/gtest.h>
 #include <map>
 #include <numbers>
+#include <variant>
 #include <vector>
 
 namespace kiln::dynamics {
@@ -220,6 +222,52 @@ SceneSpec mixed_pour(int threads) {
         s.inserts.push_back(ins);
     }
     return s;
+}
+
+TEST(Bodies, EveryClumpMemberTouchingAWallMakesOneContact) {
+    // The wall pass keeps a body's members within 1e-9 of their radius of touching a wall and the
+    // exact test decides for those. A tilted 36-sphere clump pressed into a plane wall, then into
+    // a cylinder wall, its deepest member 0.8 mm in: one wall contact per member whose sphere
+    // overlaps the wall at the pose of the step, counted here from the template (no member within
+    // 1e-6 of its radius of touching, so the count does not hang on round-off).
+    const geometry::ShapeTemplate t = shape("cylinder_36");
+    const auto& members = std::get<geometry::Clump>(t.shape).spheres;
+    const Quat q(Eigen::AngleAxisd(0.4, Vec3(1.0, 2.0, 0.5).normalized()));
+    const Mat3 r0 = q.toRotationMatrix();
+    constexpr double depth = 0.8e-3;
+    for (int kind = 0; kind < 2; ++kind) {
+        SceneSpec s = base_scene();
+        s.gravity.setZero();
+        s.shapes.push_back(t);
+        const double tube = 0.02;
+        double reach = -1.0; // the largest of (R c).z - r (plane) or (R c).x + r (tube)
+        for (const auto& m : members) {
+            const Vec3 c = r0 * m.centre;
+            reach = std::max(reach, kind == 0 ? m.radius - c.z() : c.x() + m.radius);
+        }
+        const Vec3 x = kind == 0 ? Vec3(0, 0, reach - depth) : Vec3(tube - reach + depth, 0, 0);
+        const WallShape w = kind == 0 ? WallShape(PlaneWall{Vec3::Zero(), Vec3::UnitZ()})
+                                      : WallShape(CylinderWall{Vec3::Zero(), Vec3::UnitZ(), tube});
+        s.walls.push_back({"wall", w, 0});
+        s.particles.push_back(body(0, x, Vec3::Zero(), Vec3::Zero(), q));
+        System sys(s);
+        sys.step();
+        const Vec3 xb = sys.particles().x[0];
+        const Mat3 rb = sys.particles().q[0].toRotationMatrix();
+        long touching = 0;
+        long razor = 0;
+        for (const auto& m : members) {
+            const Vec3 c = xb + rb * m.centre;
+            const double overlap = std::visit(
+                [&](const auto& ws) { return wall_contact(ws, c, m.radius).overlap; }, w);
+            touching += overlap > 0.0 ? 1 : 0;
+            razor += std::abs(overlap) < 1e-6 * m.radius ? 1 : 0;
+        }
+        EXPECT_EQ(razor, 0) << "wall " << kind;
+        EXPECT_GE(touching, 3) << "wall " << kind;
+        EXPECT_LT(touching, static_cast<long>(members.size())) << "wall " << kind;
+        EXPECT_EQ(sys.counters().wall_contacts, touching) << "wall " << kind;
+    }
 }
 
 TEST(Bodies, MixedPourGivesTheSameBitsForOneAndTwoThreads) {
