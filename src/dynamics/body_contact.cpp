@@ -621,13 +621,10 @@ double equivalent_radius(const geometry::ShapeTemplate& t) {
     return std::cbrt(3.0 * t.volume / (4.0 * std::numbers::pi));
 }
 
-void pose_members(const Vec3& x, const Mat3& rot, const geometry::ClumpSphere* src, std::size_t n,
-                  double* out) {
-    static_assert(sizeof(geometry::ClumpSphere) == 4 * sizeof(double),
-                  "a member is four packed doubles: centre and radius");
+void pose_members(const Vec3& x, const Mat3& rot, const MemberColumns& cols, double* out) {
+    const std::size_t n = cols.n;
     std::size_t j = 0;
 #if defined(__AVX512F__)
-    const auto* in = reinterpret_cast<const double*>(src);
     const __m512i lo = _mm512_setr_epi64(0, 4, 8, 12, 1, 5, 9, 13);
     const __m512i hi = _mm512_setr_epi64(2, 6, 10, 14, 3, 7, 11, 15);
     const __m512i first = _mm512_setr_epi64(0, 1, 2, 3, 8, 9, 10, 11);
@@ -639,20 +636,15 @@ void pose_members(const Vec3& x, const Mat3& rot, const geometry::ClumpSphere* s
                   r22 = _mm512_set1_pd(rot(2, 2));
     const __m512d bx = _mm512_set1_pd(x.x()), by = _mm512_set1_pd(x.y()),
                   bz = _mm512_set1_pd(x.z());
+    const double* cxs = cols.c.data();
+    const double* cys = cxs + cols.stride;
+    const double* czs = cys + cols.stride;
+    const double* crs = czs + cols.stride;
     for (; j + 8 <= n; j += 8) {
-        const double* p = in + 4 * j;
-        const __m512d m01 = _mm512_loadu_pd(p);                    // x0 y0 z0 r0 x1 y1 z1 r1
-        const __m512d m23 = _mm512_loadu_pd(p + 8);                // members 2, 3
-        const __m512d m45 = _mm512_loadu_pd(p + 16);               // members 4, 5
-        const __m512d m67 = _mm512_loadu_pd(p + 24);               // members 6, 7
-        const __m512d xy03 = _mm512_permutex2var_pd(m01, lo, m23); // x0..x3 y0..y3
-        const __m512d zr03 = _mm512_permutex2var_pd(m01, hi, m23); // z0..z3 r0..r3
-        const __m512d xy47 = _mm512_permutex2var_pd(m45, lo, m67);
-        const __m512d zr47 = _mm512_permutex2var_pd(m45, hi, m67);
-        const __m512d cx = _mm512_permutex2var_pd(xy03, first, xy47);
-        const __m512d cy = _mm512_permutex2var_pd(xy03, second, xy47);
-        const __m512d cz = _mm512_permutex2var_pd(zr03, first, zr47);
-        const __m512d cr = _mm512_permutex2var_pd(zr03, second, zr47);
+        const __m512d cx = _mm512_loadu_pd(cxs + j);
+        const __m512d cy = _mm512_loadu_pd(cys + j);
+        const __m512d cz = _mm512_loadu_pd(czs + j);
+        const __m512d cr = _mm512_loadu_pd(crs + j);
         // member_centre's operations, in its order
         const __m512d ox = _mm512_add_pd(
             bx, _mm512_fmadd_pd(r02, cz, _mm512_fmadd_pd(r01, cy, _mm512_mul_pd(r00, cx))));
@@ -672,12 +664,27 @@ void pose_members(const Vec3& x, const Mat3& rot, const geometry::ClumpSphere* s
     }
 #endif
     for (; j < n; ++j) {
-        const Vec3 c = member_centre(x, rot, src[j].centre);
+        const Vec3 c = member_centre(
+            x, rot, Vec3(cols.c[j], cols.c[cols.stride + j], cols.c[2 * cols.stride + j]));
         out[4 * j] = c.x();
         out[4 * j + 1] = c.y();
         out[4 * j + 2] = c.z();
-        out[4 * j + 3] = src[j].radius;
+        out[4 * j + 3] = cols.c[3 * cols.stride + j];
     }
+}
+
+MemberColumns member_columns(const geometry::ClumpSphere* spheres, std::size_t n) {
+    MemberColumns m;
+    m.n = n;
+    m.stride = n;
+    m.c.resize(4 * n);
+    for (std::size_t j = 0; j < n; ++j) {
+        m.c[j] = spheres[j].centre.x();
+        m.c[n + j] = spheres[j].centre.y();
+        m.c[2 * n + j] = spheres[j].centre.z();
+        m.c[3 * n + j] = spheres[j].radius;
+    }
+    return m;
 }
 
 void append_elements(const geometry::ShapeTemplate* t, const Vec3& x, const Quat& q, double r,

@@ -100,13 +100,23 @@ inline Vec3 member_centre(const Vec3& x, const Mat3& rot, const Vec3& c) {
             x.z() + std::fma(rot(2, 0), c.x(), std::fma(rot(2, 2), c.z(), rot(2, 1) * c.y()))};
 }
 
-/// World records (x, y, z, r), four doubles each, into `out`, of the n members `src` of a clump at
+/// A clump's members by component (body frame): c[0 .. n) the x of the centres (m), then at
+/// stride the y, the z and the radii (m). Read eight at a time into vector lanes, without
+/// turning records into components at every step.
+struct MemberColumns {
+    std::size_t n = 0;      ///< members
+    std::size_t stride = 0; ///< doubles from one component to the next
+    std::vector<double> c;  ///< the four components, one after the other
+};
+
+/// The n members `spheres` of a clump by component.
+[[nodiscard]] MemberColumns member_columns(const geometry::ClumpSphere* spheres, std::size_t n);
+
+/// World records (x, y, z, r), four doubles each, into `out`, of the members `cols` of a clump at
 /// x with R = `rot` (body -> world): centre member_centre(x, rot, c) (m, world), radius r (m).
-/// With AVX-512, eight members at a time: the records turned into one register per component,
-/// member_centre's operations lane by lane (so the same bits), and turned back into records
-/// (GCC's own vector loop stored every double alone).
-void pose_members(const Vec3& x, const Mat3& rot, const geometry::ClumpSphere* src, std::size_t n,
-                  double* out);
+/// With AVX-512, eight members at a time: member_centre's operations lane by lane (so the same
+/// bits), the results turned into records (GCC's own vector loop stored every double alone).
+void pose_members(const Vec3& x, const Mat3& rot, const MemberColumns& cols, double* out);
 
 /// Appends the elements of a particle (centre x, orientation q, radius r) of template t (nullptr:
 /// a sphere) to `out`. A polyhedron template needs the overload with its features.

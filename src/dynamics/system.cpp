@@ -90,9 +90,13 @@ System::System(const SceneSpec& spec)
         wall_material_.push_back(w.material);
     }
     poly_features_.resize(spec_.shapes.size());
+    member_columns_.resize(spec_.shapes.size());
     for (std::size_t k = 0; k < spec_.shapes.size(); ++k) {
         if (const auto* ph = std::get_if<geometry::ConvexPolyhedron>(&spec_.shapes[k].shape)) {
             poly_features_[k] = geometry::polyhedron_features(*ph);
+        }
+        if (const auto* c = std::get_if<geometry::Clump>(&spec_.shapes[k].shape)) {
+            member_columns_[k] = member_columns(c->spheres.data(), c->spheres.size());
         }
     }
     for (const auto& ps : spec_.particles) {

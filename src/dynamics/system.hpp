@@ -467,6 +467,7 @@ class System {
     std::vector<std::uint32_t> element_begin_; // particle i: [begin[i], begin[i + 1])
     // Polyhedron features per template (empty for other shapes), built once in the constructor.
     std::vector<geometry::PolyhedronFeatures> poly_features_;
+    std::vector<MemberColumns> member_columns_;   // per template: a clump's members by component
     std::vector<geometry::MeshContact> mesh_buf_; // scratch of mesh-wall queries
     // Contact onsets (SceneSpec::record_contact_onsets): per pair chunk and per particle unit
     // while the force loop runs, then joined in that fixed order into onsets_.

@@ -351,7 +351,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             MemberSphere* out = room(c->spheres.size());
             n_elements += c->spheres.size();
             static_assert(sizeof(MemberSphere) == 4 * sizeof(double), "x, y, z, r packed");
-            pose_members(p_.x[i], rot_[i], c->spheres.data(), c->spheres.size(),
+            pose_members(p_.x[i], rot_[i], member_columns_[static_cast<std::size_t>(p_.shape[i])],
                          reinterpret_cast<double*>(out));
             continue;
         }

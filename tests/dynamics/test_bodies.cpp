@@ -41,7 +41,7 @@ TEST(Bodies, PosedMembersAreMemberCentreBitForBit) {
     const Vec3 x(0.0123, -0.045, 0.2071);
     for (std::size_t n = 0; n <= spheres.size(); ++n) {
         std::vector<double> out(4 * n + 4, -1.0); // one record past the end stays untouched
-        pose_members(x, rot, spheres.data(), n, out.data());
+        pose_members(x, rot, member_columns(spheres.data(), n), out.data());
         for (std::size_t j = 0; j < n; ++j) {
             const Vec3 c = member_centre(x, rot, spheres[j].centre);
             EXPECT_EQ(out[4 * j], c.x()) << n << " members, member " << j;
