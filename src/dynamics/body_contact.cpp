@@ -637,9 +637,9 @@ void pose_members(const Vec3& x, const Mat3& rot, const MemberColumns& cols, dou
     const __m512d bx = _mm512_set1_pd(x.x()), by = _mm512_set1_pd(x.y()),
                   bz = _mm512_set1_pd(x.z());
     const double* cxs = cols.c.data();
-    const double* cys = cxs + cols.stride;
-    const double* czs = cys + cols.stride;
-    const double* crs = czs + cols.stride;
+    const double* cys = cxs + n;
+    const double* czs = cys + n;
+    const double* crs = czs + n;
     for (; j + 8 <= n; j += 8) {
         const __m512d cx = _mm512_loadu_pd(cxs + j);
         const __m512d cy = _mm512_loadu_pd(cys + j);
@@ -664,19 +664,17 @@ void pose_members(const Vec3& x, const Mat3& rot, const MemberColumns& cols, dou
     }
 #endif
     for (; j < n; ++j) {
-        const Vec3 c = member_centre(
-            x, rot, Vec3(cols.c[j], cols.c[cols.stride + j], cols.c[2 * cols.stride + j]));
+        const Vec3 c = member_centre(x, rot, Vec3(cols.c[j], cols.c[n + j], cols.c[2 * n + j]));
         out[4 * j] = c.x();
         out[4 * j + 1] = c.y();
         out[4 * j + 2] = c.z();
-        out[4 * j + 3] = cols.c[3 * cols.stride + j];
+        out[4 * j + 3] = cols.c[3 * n + j];
     }
 }
 
 MemberColumns member_columns(const geometry::ClumpSphere* spheres, std::size_t n) {
     MemberColumns m;
     m.n = n;
-    m.stride = n;
     m.c.resize(4 * n);
     for (std::size_t j = 0; j < n; ++j) {
         m.c[j] = spheres[j].centre.x();

@@ -100,13 +100,12 @@ inline Vec3 member_centre(const Vec3& x, const Mat3& rot, const Vec3& c) {
             x.z() + std::fma(rot(2, 0), c.x(), std::fma(rot(2, 2), c.z(), rot(2, 1) * c.y()))};
 }
 
-/// A clump's members by component (body frame): c[0 .. n) the x of the centres (m), then at
-/// stride the y, the z and the radii (m). Read eight at a time into vector lanes, without
+/// A clump's members by component (body frame): c[0 .. n) the x of the centres (m), then
+/// c[n .. 2n) the y, the z and the radii (m). Read eight at a time into vector lanes, without
 /// turning records into components at every step.
 struct MemberColumns {
-    std::size_t n = 0;      ///< members
-    std::size_t stride = 0; ///< doubles from one component to the next
-    std::vector<double> c;  ///< the four components, one after the other
+    std::size_t n = 0;     ///< members
+    std::vector<double> c; ///< the four components, n each, one after the other
 };
 
 /// The n members `spheres` of a clump by component.

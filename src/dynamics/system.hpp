@@ -462,8 +462,8 @@ class System {
     };
     std::vector<MemberSphere> member_c_;
     std::vector<std::uint32_t> member_hits_; // this step's touching member pairs (scratch)
-    std::vector<std::uint32_t>
-        wall_hits_; // a body's elements near a plane or cylinder wall (scratch)
+    // A body's elements near a plane or cylinder wall (scratch of body_forces' wall pass).
+    std::vector<std::uint32_t> wall_hits_;
     std::vector<std::uint32_t> element_begin_; // particle i: [begin[i], begin[i + 1])
     // Polyhedron features per template (empty for other shapes), built once in the constructor.
     std::vector<geometry::PolyhedronFeatures> poly_features_;
