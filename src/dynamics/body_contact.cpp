@@ -353,7 +353,8 @@ double polyhedron_pair_radius(const Element& a, const Element& b) {
 }
 
 /// Two polyhedron elements: fast common plane (default) or libccd GJK/EPA with the common-plane
-/// patch along EPA's normal. Normal from b to a; point: pair_point. `touched_last`, `memo`: see
+/// patch along EPA's normal (the common plane when EPA fails or its normal points the wrong
+/// way). Normal from b to a; point: pair_point. `touched_last`, `memo`: see
 /// element_contact.
 ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase method, Vec3* sep,
                                bool touched_last, geometry::PlaneMemo* memo) {
@@ -385,15 +386,30 @@ ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase m
     geometry::PolyhedronContact pc;
     thread_local std::vector<std::pair<Vec3, double>> va;
     thread_local std::vector<std::pair<Vec3, double>> vb;
-    bool near_known = false; // va, vb hold the near supports of pc's plane
-    if (method == NarrowPhase::gjk_epa) {
+    bool near_known = false;                     // va, vb hold the near supports of pc's plane
+    bool exact = method != NarrowPhase::gjk_epa; // the fast common plane answers
+    if (!exact) {
         const geometry::ConvexContact cc = geometry::ccd_contact(pa, pb, false);
-        out.converged = cc.converged;
-        if (!cc.converged || !cc.touching) {
-            return out;
+        if (cc.converged && !cc.touching) {
+            return out; // apart by GJK
         }
-        pc = geometry::contact_patch_along(pa, pb, cc.normal);
-    } else {
+        // EPA's answer is kept only when the overlap along its normal is the smaller of the
+        // overlaps along it and its reverse. On a pair that touches to within libccd's tolerance
+        // (the origin on the boundary of the Minkowski difference) EPA may return the normal
+        // reversed, with a depth of the tolerance's size: along that normal the overlap is the
+        // bodies' size, a force that set a bed of 16-edged prisms spinning (docs/performance.md,
+        // "The atlas"; test Polyhedra.GjkEpaWithItsNormalReversedFallsBackToTheCommonPlane).
+        // Such an answer, and a query that did not converge, go to the exact common plane
+        // (counted as a fallback).
+        if (cc.converged && geometry::polyhedron_overlap_along(pa, pb, cc.normal) <=
+                                geometry::polyhedron_overlap_along(pa, pb, -cc.normal)) {
+            pc = geometry::contact_patch_along(pa, pb, cc.normal);
+        } else {
+            exact = true;
+            out.fell_back = true;
+        }
+    }
+    if (exact) {
         // The patch only where pair_point reads it (face on face): the same numbers as with it.
         // (The plane's normal and depth are those of the result, so the lists serve pair_point.)
         // One pointer captured, so the std::function keeps the test in its own storage (a

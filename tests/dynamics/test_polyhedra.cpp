@@ -9,6 +9,7 @@
 #include "io/shape_reader.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <gtest/gtest.h>
@@ -602,6 +603,101 @@ TEST(Polyhedra, GjkEpaOverlapOfAShallowCubePairIsTheSeparatingAxisDepth) {
 
 namespace kiln::dynamics {
 namespace {
+
+TEST(Polyhedra, GjkEpaWithItsNormalReversedFallsBackToTheCommonPlane) {
+    // Eight pairs of 16-edged prisms from the GJK/EPA level of the shape atlas
+    // (cases/pour_cylinders/tradeoff.toml), poses as recorded in that run (hex floats). Each pair
+    // touches or is apart to within about 1e-6 m. libccd's GJK found every one intersecting and
+    // its EPA returned a normal pointing the wrong way. Along that normal the overlap is the size
+    // of the bodies (12-16 mm), and that force set the bed spinning. The GJK/EPA route must now
+    // answer as the common plane does: the same contact or none.
+    const geometry::ShapeTemplate prism = shape("cylinder_16");
+    const geometry::PolyhedronFeatures f =
+        geometry::polyhedron_features(std::get<geometry::ConvexPolyhedron>(prism.shape));
+    struct Pose {
+        Vec3 x;
+        Quat q;
+    };
+    const std::array<std::array<Pose, 2>, 8> pairs{{
+        {{{Vec3(-0x1.3974485b5f15bp-11, 0x1.b10ee3a9e65f5p-10, 0x1.0a6fd64bd15e4p-7),
+           Quat(0x1.66df5ae9949a7p-1, -0x1.3ba40a9c89ae3p-6, -0x1.8484d82be86a4p-4,
+                0x1.69cc9c178cb1p-1)},
+          {Vec3(-0x1.4570c3b4a2c77p-8, 0x1.d84be40d3cc8cp-8, 0x1.8a7cc63d3170cp-8),
+           Quat(0x1.847be1c3c48f6p-1, 0x1.74e4b94cda307p-2, 0x1.12999e7e7a74bp-1,
+                -0x1.040d1bf3abf04p-4)}}},
+        {{{Vec3(0x1.c0f32749aa6c4p-10, 0x1.ea92f1108a0c2p-8, 0x1.e2dace610389ep-7),
+           Quat(0x1.27f822182d3f4p-2, 0x1.074299e148606p-1, -0x1.0bd461a8a782bp-1,
+                -0x1.3af840710edacp-1)},
+          {Vec3(0x1.64bc1c2fb2304p-9, 0x1.c277a6f395261p-10, 0x1.2756ed9c52f46p-7),
+           Quat(0x1.b0e1b4384a216p-1, -0x1.7998c7a38d7a4p-2, 0x1.43678b270d3a7p-3,
+                -0x1.68f9981931bbfp-2)}}},
+        {{{Vec3(0x1.02d3cb521f17dp-7, -0x1.410ab1e96ade4p-10, 0x1.0a620b969d96dp-5),
+           Quat(-0x1.8cce218c7ee66p-3, 0x1.2d99a18921305p-6, -0x1.e4c04ab6b91edp-1,
+                0x1.0687e1b60c95ap-2)},
+          {Vec3(0x1.4da590d763e93p-9, -0x1.359817642c305p-11, 0x1.344cba41da6aap-5),
+           Quat(-0x1.20b83799d79f8p-2, -0x1.02829b3de300bp-1, -0x1.2a2d7829e58bep-1,
+                -0x1.2484a2d84360dp-1)}}},
+        {{{Vec3(0x1.6a7457635616cp-9, -0x1.e2207e14687dap-15, 0x1.7f6e09c0539fbp-9),
+           Quat(-0x1.7d847e3361252p-1, 0x1.346d15851fe59p-1, 0x1.722ca91abe344p-3,
+                -0x1.c644332e8e9dfp-3)},
+          {Vec3(0x1.99efd64ffbd18p-9, 0x1.e732bc1367d86p-10, 0x1.24fb39c81655p-7),
+           Quat(0x1.2676a0c3ba9efp-4, -0x1.6546e2a73e539p-1, -0x1.f1abfdaf0f706p-5,
+                -0x1.6b8f050b88bcfp-1)}}},
+        {{{Vec3(-0x1.550e125738638p-8, -0x1.7be17abc5bf6ep-8, 0x1.80bf07bf020f4p-9),
+           Quat(-0x1.0a5e1b52fafe8p-1, 0x1.b910c61959621p-2, 0x1.e18b60b0147dp-2,
+                -0x1.22d65992bf271p-1)},
+          {Vec3(0x1.fb834d67efc8cp-11, -0x1.182dfaab29817p-7, 0x1.8106f203b88b4p-9),
+           Quat(0x1.78c860f90ec6bp-1, 0x1.2845b851c6228p-4, -0x1.0dc1063b6e1fdp-4,
+                -0x1.5707ef90e72f2p-1)}}},
+        {{{Vec3(0x1.010e491789aa3p-10, 0x1.e346de9d09b3cp-9, 0x1.34cd226fffadap-6),
+           Quat(-0x1.f6222948b3685p-2, -0x1.4f7375f637284p-5, -0x1.99520989c4cf8p-1,
+                0x1.60daf09be3d14p-2)},
+          {Vec3(-0x1.85f9bcd0c95ccp-9, -0x1.1dd467545cb9bp-10, 0x1.cdab67f721402p-7),
+           Quat(-0x1.4591048272356p-3, -0x1.8e2979dc8ed74p-1, 0x1.22563c70c7d29p-2,
+                0x1.1385b5c9815cep-1)}}},
+        {{{Vec3(-0x1.af3884bad499bp-8, 0x1.35584180e3b88p-8, 0x1.e76165378b9a2p-7),
+           Quat(-0x1.6a06f5e3a539fp-1, 0x1.1b6670522613ep-3, 0x1.601bba37a4a38p-1,
+                0x1.6ce2729770b0dp-4)},
+          {Vec3(-0x1.dbd22f0065759p-8, 0x1.34b8a442e0d61p-8, 0x1.563fe80f04046p-6),
+           Quat(0x1.1ffc2df4f05dap-1, -0x1.58ca5ad70bec8p-1, -0x1.5c63a38607ec6p-2,
+                0x1.5a51e9e5dd8fap-2)}}},
+        {{{Vec3(-0x1.2263f1fda82cep-8, -0x1.013ae82fb8eap-7, 0x1.e95236b64e885p-7),
+           Quat(0x1.3266405d366e5p-3, -0x1.6434cff0f0f07p-1, -0x1.220c77b43028ap-3,
+                -0x1.605426586f0f2p-1)},
+          {Vec3(-0x1.082536b0678b5p-8, -0x1.017de512d59a1p-7, 0x1.574fb14fe84f7p-6),
+           Quat(0x1.95bd199021561p-2, -0x1.2d3b12c303a01p-1, -0x1.914272a6b51cp-2,
+                -0x1.2bfe306be5e96p-1)}}},
+    }};
+    int reversed = 0;
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+        SCOPED_TRACE(k);
+        std::vector<Element> e;
+        for (const Pose& p : pairs[k]) {
+            append_elements(&prism, &f, p.x, p.q, prism.bounding_radius(), e);
+        }
+        ASSERT_EQ(e.size(), 2U);
+        const geometry::PosedPolyhedron pa{&f, e[0].centre, e[0].q};
+        const geometry::PosedPolyhedron pb{&f, e[1].centre, e[1].q};
+        const geometry::ConvexContact epa = geometry::ccd_contact(pa, pb, false);
+        if (epa.converged && epa.touching &&
+            geometry::polyhedron_overlap_along(pa, pb, epa.normal) >
+                geometry::polyhedron_overlap_along(pa, pb, -epa.normal)) {
+            ++reversed;
+        }
+        const ElementContact c = element_contact(e[0], e[1], NarrowPhase::newton, nullptr);
+        const ElementContact g = element_contact(e[0], e[1], NarrowPhase::gjk_epa, nullptr);
+        ASSERT_TRUE(c.converged);
+        ASSERT_TRUE(g.converged);
+        ASSERT_EQ(g.touching, c.touching);
+        if (c.touching) {
+            EXPECT_NEAR(g.overlap, c.overlap, 1e-9 * prism.bounding_radius());
+            EXPECT_GT(g.normal.dot(c.normal), 1.0 - 1e-9);
+        }
+    }
+    // The poses still meet libccd's reversed normal (otherwise this test no longer tests it).
+    EXPECT_GT(reversed, 0);
+    std::printf("EPA normal reversed in %d of %zu pairs\n", reversed, pairs.size());
+}
 
 TEST(Polyhedra, GjkEpaFindsTheContactsOfACommonPlaneBed) {
     // Item of issue 4: a GJK/EPA bed of cubes had a third of the contacts of a common-plane bed
