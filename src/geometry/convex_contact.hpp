@@ -55,6 +55,9 @@ struct ConvexContact {
     bool deepest_known = false;    ///< deepest_a and deepest_b hold the supports along `normal`
     Vec3 deepest_a = Vec3::Zero(); ///< A's deepest point s_A(-normal) (m), world frame
     Vec3 deepest_b = Vec3::Zero(); ///< B's deepest point s_B(normal) (m), world frame
+    /// libccd only (ccd_adapter.cpp): its normal pointed the wrong way (the overlap along its
+    /// reverse was the smaller) and the answer was repaired from MPR and that reverse.
+    bool repaired = false;
 
     /// Sets the deepest points (world frame) and the contact point, their midpoint.
     void set_deepest(const Vec3& sa, const Vec3& sb) {
