@@ -10,6 +10,8 @@
 #include <ccd/ccd.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
 namespace kiln::geometry {
 
@@ -125,11 +127,15 @@ ConvexContact query(const A& a, const B& b, const Vec3& origin, double scale, bo
     // was the contact's. Two polyhedra take the exact common plane instead (body_contact.cpp).
     const double plus = overlap_along(a, b, c.normal);
     const double minus = overlap_along(a, b, Vec3(-c.normal));
-    if (minus < plus) {
+    // (Also when either is not a number: at GJK's very boundary libccd's direction can be NaN,
+    // seen in a sanitizer build; that answer is repaired the same way or reported as failed.)
+    if (!(plus <= minus)) {
         c.repaired = true;
         const ConvexContact m = use_mpr ? c : query(a, b, origin, scale, true, epa_tolerance);
         if (!m.converged) {
             c.converged = false;
+            c.touching = false;
+            c.depth = 0.0;
             return c;
         }
         if (!m.touching) {
@@ -138,13 +144,19 @@ ConvexContact query(const A& a, const B& b, const Vec3& origin, double scale, bo
             return c;
         }
         Vec3 best = -c.normal;
-        c.depth = minus;
+        c.depth = std::isfinite(minus) ? minus : std::numeric_limits<double>::infinity();
         for (const Vec3& n : {m.normal, Vec3(-m.normal)}) {
             const double along = overlap_along(a, b, n);
             if (along < c.depth) {
                 c.depth = along;
                 best = n;
             }
+        }
+        if (!std::isfinite(c.depth)) { // no direction with a finite overlap
+            c.converged = false;
+            c.touching = false;
+            c.depth = 0.0;
+            return c;
         }
         c.normal = best;
         c.touching = c.depth > 0.0;
