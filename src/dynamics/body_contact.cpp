@@ -393,23 +393,20 @@ ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase m
         if (cc.converged && !cc.repaired && !cc.touching) {
             return out; // apart by GJK
         }
-        // EPA's answer is kept only when it is consistent: its normal not reversed (libccd's
-        // reversed normals on pairs touching within its tolerance are repaired in ccd_adapter.cpp;
-        // checked again here) and the overlap along it within 1e-6 of the length scale of EPA's
-        // depth (EPA's polytope lies inside the Minkowski difference, so its depth is a lower
-        // bound of the overlap along any direction; kPolytopeEpaTolerance bounds the excess by
-        // about 1e-7 of the scale, more for contacts shallower than ~1e-8 of it). Along a reversed
-        // normal the overlap was the size of the bodies, a force that set a bed of 16-edged prisms
-        // spinning (docs/performance.md, "The atlas"; test
-        // Polyhedra.GjkEpaWithItsNormalReversedFallsBackToTheCommonPlane). Any other answer, and a
-        // query that did not converge, go to the exact common plane (counted as a fallback).
-        if (cc.converged && !cc.repaired &&
-            geometry::polyhedron_overlap_along(pa, pb, cc.normal) <=
-                geometry::polyhedron_overlap_along(pa, pb, -cc.normal)) {
+        // EPA's answer is kept only when it is consistent: not repaired (ccd_adapter.cpp repairs
+        // libccd's reversed normals on pairs touching within its tolerance), and the overlap along
+        // its normal within 1e-6 of the length scale of EPA's depth (EPA's polytope lies inside
+        // the Minkowski difference, so its depth is a lower bound of the overlap along any
+        // direction; kPolytopeEpaTolerance bounds the excess by about 1e-7 of the scale, more for
+        // contacts shallower than ~1e-8 of it). Along a reversed normal the overlap was the size
+        // of the bodies, a force that set a bed of 16-edged prisms spinning (docs/performance.md,
+        // "The atlas"; test Polyhedra.GjkEpaWithItsNormalReversedFallsBackToTheCommonPlane). Any
+        // other answer, and a query that did not converge, go to the exact common plane (counted
+        // as a fallback).
+        exact = !cc.converged || cc.repaired;
+        if (!exact) {
             pc = geometry::contact_patch_along(pa, pb, cc.normal);
             exact = pc.depth > cc.depth + 1e-6 * (pa.shape->radius + pb.shape->radius);
-        } else {
-            exact = true;
         }
         out.fell_back = exact;
     }
