@@ -131,17 +131,15 @@ ConvexContact query(const A& a, const B& b, const Vec3& origin, double scale, bo
     // seen in a sanitizer build; that answer is repaired the same way or reported as failed.)
     if (!(plus <= minus)) {
         c.repaired = true;
+        const auto not_touching = [&c](bool converged) {
+            c.converged = converged;
+            c.touching = false;
+            c.depth = 0.0;
+            return c;
+        };
         const ConvexContact m = use_mpr ? c : query(a, b, origin, scale, true, epa_tolerance);
-        if (!m.converged) {
-            c.converged = false;
-            c.touching = false;
-            c.depth = 0.0;
-            return c;
-        }
-        if (!m.touching) {
-            c.touching = false;
-            c.depth = 0.0;
-            return c;
+        if (!m.converged || !m.touching) {
+            return not_touching(m.converged);
         }
         Vec3 best = -c.normal;
         c.depth = std::isfinite(minus) ? minus : std::numeric_limits<double>::infinity();
@@ -152,17 +150,12 @@ ConvexContact query(const A& a, const B& b, const Vec3& origin, double scale, bo
                 best = n;
             }
         }
-        if (!std::isfinite(c.depth)) { // no direction with a finite overlap
-            c.converged = false;
-            c.touching = false;
-            c.depth = 0.0;
-            return c;
+        if (!std::isfinite(c.depth)) {
+            return not_touching(false); // no direction with a finite overlap
         }
         c.normal = best;
-        c.touching = c.depth > 0.0;
-        if (!c.touching) {
-            c.depth = 0.0;
-            return c;
+        if (!(c.depth > 0.0)) {
+            return not_touching(true); // the direction kept separates them
         }
     }
     c.point = 0.5 * (a.support(-c.normal) + b.support(c.normal));
