@@ -1,13 +1,18 @@
 // Cost per pair of the polyhedron contact methods on random overlapping poses of each shipped
 // polyhedron with itself (overlap 1e-4 to 5e-2 of the bounding radius), by feature-edge count:
 // fast common plane with and without the points and patch, libccd GJK + EPA and MPR; a
-// sphere-sphere overlap for comparison; mesh-wall queries of a sphere and a cube. Run:
+// sphere-sphere overlap for comparison; mesh-wall queries of a sphere and a cube; a polyhedron
+// against a superquadric by libccd's EPA alone and with the normal's refinement
+// (depth_refinement.hpp, as the contact of such a pair runs it). Run:
 // build/bench/kiln_bench_polyhedra
 
+#include "geometry/convex_contact.hpp"
+#include "geometry/depth_refinement.hpp"
 #include "geometry/mesh_wall.hpp"
 #include "geometry/polyhedron_contact.hpp"
 #include "io/shape_reader.hpp"
 
+#include <algorithm>
 #include <benchmark/benchmark.h>
 #include <cmath>
 #include <map>
@@ -144,8 +149,65 @@ void run_wall(benchmark::State& state, bool cube) {
     state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()));
 }
 
+/// A polyhedron and a superquadric (a 1:2:3 ellipsoid, or a blocky one of e = 0.3), 256 random
+/// overlapping poses (overlap 1e-4 to 5e-2 of the polyhedron's bounding radius): libccd's EPA
+/// and the overlap along its normal (Refine::no), then the refinement of the normal always
+/// (Refine::always) or, as the contact runs it (body_contact.cpp), only where the overlap along
+/// EPA's normal exceeds EPA's depth by more than 1e-3 of itself plus 1e-9 of the length scale
+/// (Refine::gated; the counter `refined` is the share of pairs refined).
+enum class Refine { no, always, gated };
+void run_mixed(benchmark::State& state, const std::string& name, double e, Refine refine) {
+    const g::PolyhedronFeatures& s = shape(name);
+    g::Superquadric q;
+    q.half_axes = Vec3(1e-3, 2e-3, 3e-3);
+    q.e1 = q.e2 = e;
+    std::mt19937_64 rng(2);
+    std::normal_distribution<double> nd;
+    std::uniform_real_distribution<double> ud(std::log(1e-4), std::log(5e-2));
+    std::vector<std::pair<g::PosedPolyhedron, g::PosedSuperquadric>> pairs;
+    for (int i = 0; i < 256; ++i) {
+        g::PosedPolyhedron a{&s, Vec3::Zero(),
+                             Quat(nd(rng), nd(rng), nd(rng), nd(rng)).normalized()};
+        g::PosedSuperquadric b{&q, Vec3::Zero(),
+                               Quat(nd(rng), nd(rng), nd(rng), nd(rng)).normalized()};
+        const Vec3 u = Vec3(nd(rng), nd(rng), nd(rng)).normalized();
+        b.x = a.support(u) - std::exp(ud(rng)) * s.radius * u - b.support(-u);
+        pairs.emplace_back(a, b);
+    }
+    std::size_t i = 0;
+    std::int64_t refined = 0;
+    for (auto _ : state) {
+        const auto& [a, b] = pairs[i++ % pairs.size()];
+        const g::ConvexContact c = g::ccd_contact(a, b, false);
+        Vec3 m = c.normal;
+        double overlap = g::overlap_along(a, b, m);
+        const double scale = a.length_scale() + b.length_scale();
+        const bool wide = c.repaired || overlap - c.depth > 1e-3 * overlap + 1e-9 * scale;
+        if (c.touching && (refine == Refine::always || (refine == Refine::gated && wide))) {
+            g::refine_polyhedron_normal(a, b, m, overlap);
+            ++refined;
+        }
+        benchmark::DoNotOptimize(overlap);
+        benchmark::DoNotOptimize(m);
+    }
+    state.counters["refined"] = static_cast<double>(refined) /
+                                static_cast<double>(std::max<std::int64_t>(1, state.iterations()));
+    state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()));
+}
+
 } // namespace
 
+BENCHMARK_CAPTURE(run_mixed, cube_ellipsoid_epa, std::string("cube"), 1.0, Refine::no);
+BENCHMARK_CAPTURE(run_mixed, cube_ellipsoid_epa_refined, std::string("cube"), 1.0, Refine::always);
+BENCHMARK_CAPTURE(run_mixed, cube_ellipsoid_epa_gated, std::string("cube"), 1.0, Refine::gated);
+BENCHMARK_CAPTURE(run_mixed, cube_blocky_epa, std::string("cube"), 0.3, Refine::no);
+BENCHMARK_CAPTURE(run_mixed, cube_blocky_epa_refined, std::string("cube"), 0.3, Refine::always);
+BENCHMARK_CAPTURE(run_mixed, cube_blocky_epa_gated, std::string("cube"), 0.3, Refine::gated);
+BENCHMARK_CAPTURE(run_mixed, cylinder16_ellipsoid_epa, std::string("cylinder_16"), 1.0, Refine::no);
+BENCHMARK_CAPTURE(run_mixed, cylinder16_ellipsoid_epa_refined, std::string("cylinder_16"), 1.0,
+                  Refine::always);
+BENCHMARK_CAPTURE(run_mixed, cylinder16_ellipsoid_epa_gated, std::string("cylinder_16"), 1.0,
+                  Refine::gated);
 BENCHMARK(BM_SphereSphere);
 BENCHMARK_CAPTURE(run, pyramid_plane, std::string("pyramid"), Method::kPlane);
 BENCHMARK_CAPTURE(run, pyramid_plane_patch, std::string("pyramid"), Method::kPlanePatch);

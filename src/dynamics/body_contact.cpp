@@ -3,6 +3,7 @@
 
 #include "dynamics/body_contact.hpp"
 
+#include "geometry/depth_refinement.hpp"
 #include "geometry/separating_axis.hpp"
 
 #if defined(__AVX512F__)
@@ -490,10 +491,16 @@ Vec3 wall_deepest(const Support& support, const Element& a, const WallShape& w,
     return deepest;
 }
 
+/// Relative gap between the upper and the lower bound of a polyhedron-superquadric overlap (the
+/// overlap along EPA's normal and EPA's depth) below which EPA's normal is kept unrefined (-):
+/// the overlap is then within 0.1 % of the depth (plus 1e-9 of the size).
+constexpr double kRefineGap = 1e-3;
+
 /// Polyhedron element p against superquadric element s (normal from s to p): libccd GJK/EPA on
-/// the two support maps. The overlap is then re-evaluated exactly along EPA's normal from the
-/// analytic supports (an upper bound of the MTD, as the superquadric fallback does), so it does not
-/// carry EPA's tolerance. The polyhedron counts as flat at the contact (as for a sphere), so R* is
+/// the two support maps. The normal is then refined (depth_refinement.hpp, and the polyhedron's
+/// face normals) and the overlap evaluated exactly along it from the analytic supports (an upper
+/// bound of the MTD, as the superquadric fallback does), so it does not carry EPA's tolerance. The
+/// polyhedron counts as flat at the contact (as for a sphere), so R* is
 /// the superquadric's, from its principal curvatures at its deepest point. A sphere element (a
 /// clump member) against a polyhedron never comes here (sphere_polyhedron is exact).
 ElementContact polyhedron_superquadric(const Element& p, const Element& s, const Vec3* warm,
@@ -543,15 +550,34 @@ ElementContact polyhedron_superquadric(const Element& p, const Element& s, const
     if (!cc.converged || !cc.touching) {
         return out;
     }
-    const double depth = along(cc.normal);
+    double depth = along(cc.normal);
+    Vec3 normal = cc.normal;
     if (!(depth > 0.0)) {
+        return out;
+    }
+    // EPA's normal is off by an angle that grows as the contact gets shallower, and the overlap
+    // along it with it (up to 100 times the depth 1e-6 of the size deep; up to the bodies' size
+    // on a repaired answer at GJK's boundary; docs/theory/shapes.md, "Depth along a normal"), so
+    // the normal is refined (depth_refinement.hpp): the overlap along the result stays an upper
+    // bound of the depth and comes within round-off of it. EPA's own depth is a lower bound (its
+    // polytope lies inside the Minkowski difference), so where the two bounds already agree to
+    // kRefineGap the refinement (2-3 times EPA's cost) is skipped. A repaired answer's depth and
+    // MPR's (the fallback above) are not EPA's: those are always refined.
+    const double scale = pp.length_scale() + ps.length_scale();
+    if (cc.repaired || out.fell_back || depth - cc.depth > kRefineGap * depth + 1e-9 * scale) {
+        geometry::refine_polyhedron_normal(pp, ps, normal, depth);
+    }
+    if (!(depth > 0.0)) {
+        if (sep != nullptr && depth < 0.0) {
+            *sep = normal; // a direction with a gap: apart after all
+        }
         return out;
     }
     out.touching = true;
     out.overlap = depth;
-    out.normal = cc.normal;
-    const Vec3 deepest_s = ps.support(cc.normal);
-    out.point = 0.5 * (pp.support(-cc.normal) + deepest_s);
+    out.normal = normal;
+    const Vec3 deepest_s = ps.support(normal);
+    out.point = 0.5 * (pp.support(-normal) + deepest_s);
     const auto k = s.sq->principal_curvatures(s.q.conjugate() * (deepest_s - s.centre));
     out.r_eff = effective_radius(k[0], k[1], s, &p);
     return out;
