@@ -18,6 +18,7 @@
 #include "core/types.hpp"
 #include "geometry/superquadric.hpp"
 
+#include <algorithm>
 #include <array>
 
 namespace kiln::geometry {
@@ -102,6 +103,10 @@ struct SupportTriangle {
         const double b = d.dot(v[1]);
         const double c = d.dot(v[2]);
         return a >= b ? (a >= c ? v[0] : v[2]) : (b >= c ? v[1] : v[2]);
+    }
+    /// Length scale for relative tolerances: the farthest corner from the centroid (m).
+    [[nodiscard]] double length_scale() const {
+        return std::max({(v[0] - x).norm(), (v[1] - x).norm(), (v[2] - x).norm()});
     }
 };
 

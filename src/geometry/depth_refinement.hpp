@@ -254,15 +254,14 @@ int refine_normal(const A& a, const B& b, Vec3& m, double& overlap, int rounds =
     return improved;
 }
 
-/// The best normal with a's edge (from p0 to p1, body frame) as the contact feature, started
-/// from m (unit, world, from b towards a): such a normal is perpendicular to the edge, and on the
-/// circle of those the overlap is smooth while a's support along -m is the edge, so its minimum
-/// is a root of the derivative (Danskin: the gradient of the overlap is s_b(m) - s_a(-m)), found
-/// by the secant method. Sets m and overlap and returns true when the overlap along the result
-/// is smaller than `overlap`.
+/// The best normal with an edge of a polytope (a or b; unit direction e, world frame) as the
+/// contact feature, started from m (unit, world, from b towards a): such a normal is
+/// perpendicular to the edge, and on the circle of those the overlap is smooth while the
+/// polytope's support along it is the edge, so its minimum is a root of the derivative (Danskin:
+/// the gradient of the overlap is s_b(m) - s_a(-m)), found by the secant method. Sets m and
+/// overlap and returns true when the overlap along the result is smaller than `overlap`.
 template <class A, class B>
-bool edge_normal(const A& a, const B& b, const Vec3& p0, const Vec3& p1, Vec3& m, double& overlap) {
-    const Vec3 e = (a.q * Vec3(p1 - p0)).normalized();
+bool edge_normal(const A& a, const B& b, const Vec3& e, Vec3& m, double& overlap) {
     Vec3 u = m - m.dot(e) * e;
     const double len = u.norm();
     if (!(len > 0.5)) {
@@ -340,7 +339,7 @@ void refine_polyhedron_normal(const A& a, const B& b, Vec3& m, double& overlap) 
         if (d.dot(p0) >= bar && d.dot(p1) >= bar) {
             Vec3 cand = start;
             double o = overlap;
-            if (edge_normal(a, b, p0, p1, cand, o)) {
+            if (edge_normal(a, b, Vec3((a.q * Vec3(p1 - p0)).normalized()), cand, o)) {
                 overlap = o;
                 m = cand;
             }

@@ -4,6 +4,7 @@
 
 #include "core/error.hpp"
 #include "geometry/convex_polygon.hpp"
+#include "geometry/depth_refinement.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -689,9 +690,28 @@ int MeshWall::superquadric_contacts(const PosedSuperquadric& s, double r,
             if (!cc.touching || cc.normal.dot(n) <= 0.0) {
                 continue; // apart, or pushed through the back of the one-sided wall
             }
-            const Vec3& nc = cc.normal;
-            const double depth = nc.dot(tri.support(nc)) - nc.dot(s.support(-nc));
+            // The overlap along EPA's normal exceeds the depth where EPA's normal errs, most on
+            // shallow contacts across an edge (docs/theory/shapes.md, "Depth along a normal"):
+            // the normal is refined as for a polyhedron and a superquadric (translation rounds,
+            // the triangle's normal, an edge step per edge), each step kept only where the
+            // overlap along it is smaller.
+            Vec3 nc = cc.normal;
+            double depth = overlap_along(s, tri, nc);
             if (!(depth > 0.0)) {
+                continue;
+            }
+            refine_normal(s, tri, nc, depth);
+            if (const double o = overlap_along(s, tri, n); o < depth) {
+                depth = o;
+                nc = n;
+            }
+            for (int k = 0; k < 3; ++k) {
+                const Vec3 e =
+                    (c[static_cast<std::size_t>((k + 1) % 3)] - c[static_cast<std::size_t>(k)])
+                        .normalized();
+                edge_normal(s, tri, e, nc, depth);
+            }
+            if (!(depth > 0.0) || nc.dot(n) <= 0.0) {
                 continue;
             }
             const double top = std::max({nc.dot(c[0]), nc.dot(c[1]), nc.dot(c[2])});
