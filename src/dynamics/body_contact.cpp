@@ -497,12 +497,13 @@ Vec3 wall_deepest(const Support& support, const Element& a, const WallShape& w,
 constexpr double kRefineGap = 1e-3;
 
 /// Polyhedron element p against superquadric element s (normal from s to p): libccd GJK/EPA on
-/// the two support maps. The normal is then refined (depth_refinement.hpp, and the polyhedron's
-/// face normals) and the overlap evaluated exactly along it from the analytic supports (an upper
-/// bound of the MTD, as the superquadric fallback does), so it does not carry EPA's tolerance. The
-/// polyhedron counts as flat at the contact (as for a sphere), so R* is
-/// the superquadric's, from its principal curvatures at its deepest point. A sphere element (a
-/// clump member) against a polyhedron never comes here (sphere_polyhedron is exact).
+/// the two support maps. The normal is then refined (refine_polyhedron_normal,
+/// depth_refinement.hpp: translation rounds, the polyhedron's faces and edges) and the overlap
+/// evaluated exactly along it from the analytic supports (an upper bound of the MTD, as the
+/// superquadric fallback does), so it does not carry EPA's tolerance. The polyhedron counts as
+/// flat at the contact (as for a sphere), so R* is the superquadric's, from its principal
+/// curvatures at its deepest point. A sphere element (a clump member) against a polyhedron never
+/// comes here (sphere_polyhedron is exact).
 ElementContact polyhedron_superquadric(const Element& p, const Element& s, const Vec3* warm,
                                        Vec3* sep) {
     ElementContact out;

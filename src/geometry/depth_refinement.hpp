@@ -214,13 +214,25 @@ template <class A, class B>
     return apart;
 }
 
+/// Takes the unit direction `cand` (world, from b towards a) as the normal m when the overlap
+/// along it is smaller than `overlap` (then updated); returns whether it did.
+template <class A, class B>
+bool keep_if_smaller(const A& a, const B& b, const Vec3& cand, Vec3& m, double& overlap) {
+    const double o = overlap_along(a, b, cand);
+    if (o < overlap) {
+        overlap = o;
+        m = cand;
+        return true;
+    }
+    return false;
+}
+
 /// Refines the unit normal m (world frame, from b towards a) of two overlapping bodies, and
 /// `overlap` = overlap_along(a, b, m) (m), by rounds of the translation described above (at most
 /// `rounds`). A round's normal is kept only when the overlap along it is smaller, so `overlap`
-/// never grows; it stays an upper bound of the penetration depth. Returns the number of rounds
-/// that improved the answer.
+/// never grows; it stays an upper bound of the penetration depth.
 template <class A, class B>
-int refine_normal(const A& a, const B& b, Vec3& m, double& overlap, int rounds = 3) {
+void refine_normal(const A& a, const B& b, Vec3& m, double& overlap, int rounds = 3) {
     const double scale = a.length_scale() + b.length_scale();
     // Gap of the moved bodies: large against GJK's accuracy (1e-8 of |v| here), small against
     // the curvature radii so that a round gains much. Three rounds at that accuracy did as well
@@ -228,7 +240,6 @@ int refine_normal(const A& a, const B& b, Vec3& m, double& overlap, int rounds =
     // of tests/geometry/test_depth_refinement.cpp (the overlap within 3e-12 of the scale of the
     // exact depth or of the best sampled direction), at about 0.8 of the cost (session 19).
     const double margin = 1e-4 * scale;
-    int improved = 0;
     for (int r = 0; r < rounds; ++r) {
         Vec3 v;
         if (!shortest_vector(a, b, Vec3((overlap + margin) * m), v, 1e-8)) {
@@ -246,12 +257,10 @@ int refine_normal(const A& a, const B& b, Vec3& m, double& overlap, int rounds =
         const double gain = overlap - o;
         m = cand;
         overlap = o;
-        ++improved;
         if (gain <= 1e-12 * scale) {
             break;
         }
     }
-    return improved;
 }
 
 /// The best normal with an edge of a polytope (a or b; unit direction e, world frame) as the
@@ -294,14 +303,7 @@ bool edge_normal(const A& a, const B& b, const Vec3& e, Vec3& m, double& overlap
         x1 = x2;
         g1 = slope(x1);
     }
-    const Vec3 cand = normal(x1);
-    const double o = overlap_along(a, b, cand);
-    if (o < overlap) {
-        overlap = o;
-        m = cand;
-        return true;
-    }
-    return false;
+    return keep_if_smaller(a, b, normal(x1), m, overlap);
 }
 
 /// refine_normal for a posed polyhedron a (a PosedPolyhedron or any type with `shape->vertices`,
@@ -316,12 +318,7 @@ template <class A, class B>
 void refine_polyhedron_normal(const A& a, const B& b, Vec3& m, double& overlap) {
     refine_normal(a, b, m, overlap);
     for (const Vec3& n_body : a.shape->face_normals) {
-        const Vec3 cand = -(a.q * n_body); // from b to a when this face of a faces b
-        const double o = overlap_along(a, b, cand);
-        if (o < overlap) {
-            overlap = o;
-            m = cand;
-        }
+        keep_if_smaller(a, b, Vec3(-(a.q * n_body)), m, overlap); // from b to a: a's face facing b
     }
     // Edges whose both ends lie within a band of a's support along -m (the band covers a normal
     // off by up to a few degrees: 0.05 of the bounding radius).

@@ -701,10 +701,7 @@ int MeshWall::superquadric_contacts(const PosedSuperquadric& s, double r,
                 continue;
             }
             refine_normal(s, tri, nc, depth);
-            if (const double o = overlap_along(s, tri, n); o < depth) {
-                depth = o;
-                nc = n;
-            }
+            keep_if_smaller(s, tri, n, nc, depth);
             for (int k = 0; k < 3; ++k) {
                 const Vec3 e =
                     (c[static_cast<std::size_t>((k + 1) % 3)] - c[static_cast<std::size_t>(k)])
