@@ -314,6 +314,86 @@ TEST(Polyhedra, CubeOnASuperballMatchesBruteForce) {
     EXPECT_GT(touching, 30);
 }
 
+TEST(Polyhedra, PersistentCubeOnASuperballMatchesBruteForce) {
+    // As above, but as a pair that touched at the last step: EPA is skipped and the normal refined
+    // from the last one (here the best normal turned by about 2e-3 rad, a step's rotation at
+    // 400 rad/s and dt 5e-6 s). The same bounds as from EPA.
+    const geometry::ShapeTemplate cube = shape("cube");
+    const geometry::ShapeTemplate ball = shape("superball");
+    const geometry::PolyhedronFeatures f =
+        geometry::polyhedron_features(std::get<geometry::ConvexPolyhedron>(cube.shape));
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int touching = 0;
+    for (int k = 0; k < 60; ++k) {
+        const Quat qa(Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()));
+        const Quat qb(Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()));
+        const Vec3 dir = Vec3(u(rng), u(rng), u(rng)).normalized();
+        std::vector<Element> e;
+        append_elements(&ball, nullptr, Vec3::Zero(), qb, ball.bounding_radius(), e);
+        const geometry::PosedSuperquadric pb{e[0].sq, Vec3::Zero(), qb};
+        geometry::PosedPolyhedron pa{&f, Vec3::Zero(), qa};
+        const double reach = dir.dot(pb.support(dir)) - dir.dot(pa.support(-dir) - pa.x);
+        pa.x = (reach - 2e-4) * dir;
+        append_elements(&cube, &f, pa.x, qa, cube.bounding_radius(), e);
+        Vec3 n_ref = Vec3::UnitX();
+        const double mtd = brute_mtd(pa, pb, n_ref);
+        if (!(mtd > 0.0)) {
+            continue;
+        }
+        const Vec3 tilt = n_ref.unitOrthogonal();
+        const Vec3 last = (n_ref + 2e-3 * tilt).normalized(); // from the ball to the cube
+        for (const bool swap : {false, true}) {
+            const Vec3 warm = swap ? Vec3(-last) : last;
+            const ElementContact c =
+                swap ? element_contact(e[0], e[1], NarrowPhase::newton, &warm, nullptr, true)
+                     : element_contact(e[1], e[0], NarrowPhase::newton, &warm, nullptr, true);
+            ASSERT_TRUE(c.converged) << k;
+            ASSERT_TRUE(c.touching) << k << " " << mtd;
+            const Vec3 n = swap ? Vec3(-c.normal) : c.normal;
+            EXPECT_NEAR(c.overlap, mtd, 2e-3 * mtd) << k;
+            EXPECT_LT(c.overlap, mtd + 1e-3 * mtd) << k;
+            EXPECT_GT(n.dot(n_ref), 1.0 - 1e-3) << k;
+            touching += swap ? 0 : 1;
+        }
+    }
+    EXPECT_GT(touching, 30);
+}
+
+TEST(Polyhedra, CubeFaceOnAnEllipsoidActsAboveTheEllipsoidsDeepestPoint) {
+    // A cube lies face down on an ellipsoid's top, off-centre. The overlap is the MTD along the
+    // face normal, and its gradient with respect to the cube's rotation is that of a force through
+    // the ellipsoid's deepest point (the cube's support along the normal is the whole face, the
+    // ellipsoid's a single point; Danskin), so the contact point lies on the normal through that
+    // point, half way into the overlap. The midpoint of a face vertex and that point, used before,
+    // was off by half the face's extent and made the torque non-conservative (validation 14).
+    const geometry::ShapeTemplate cube = shape("cube");
+    const geometry::ShapeTemplate ell = shape("ellipsoid_123");
+    const geometry::PolyhedronFeatures f =
+        geometry::polyhedron_features(std::get<geometry::ConvexPolyhedron>(cube.shape));
+    std::vector<Element> e;
+    append_elements(&ell, nullptr, Vec3::Zero(), Quat::Identity(), ell.bounding_radius(), e);
+    const geometry::PosedSuperquadric pe{e[0].sq, Vec3::Zero(), Quat::Identity()};
+    const Vec3 top = pe.support(Vec3::UnitZ()); // (0, 0, 3 mm)
+    geometry::PosedPolyhedron pc{&f, Vec3::Zero(), Quat::Identity()};
+    const double half = -pc.support(-Vec3::UnitZ()).z(); // the cube's half edge
+    const double overlap = 2e-5;
+    const Vec3 x(0.5e-3, 0.3e-3, top.z() + half - overlap);
+    append_elements(&cube, &f, x, Quat::Identity(), cube.bounding_radius(), e);
+    for (const bool persistent : {false, true}) {
+        const Vec3 warm(0.0, 1e-3, 1.0);
+        const Vec3 w = warm.normalized();
+        const ElementContact c = element_contact(e[1], e[0], NarrowPhase::newton,
+                                                 persistent ? &w : nullptr, nullptr, persistent);
+        ASSERT_TRUE(c.touching) << persistent;
+        EXPECT_NEAR(c.overlap, overlap, 1e-12) << persistent;
+        EXPECT_GT(c.normal.z(), 1.0 - 1e-12) << persistent;
+        EXPECT_NEAR(c.point.x(), top.x(), 1e-9) << persistent;
+        EXPECT_NEAR(c.point.y(), top.y(), 1e-9) << persistent;
+        EXPECT_NEAR(c.point.z(), top.z() - 0.5 * overlap, 1e-9) << persistent;
+    }
+}
+
 TEST(Polyhedra, CubeAndSuperballCollideKeepingMomentum) {
     // The pair runs in the step loop: a cube and a superball in one scene collide off-centre;
     // momentum and angular momentum are exchanged pairwise and no query fails.

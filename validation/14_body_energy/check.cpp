@@ -37,10 +37,10 @@ constexpr std::array<double, 3> step_factors{1.0, 0.5, 0.25};
 /// Velocities, spins up to 100 rad/s and the matching angular momenta; seed 2000 + r.
 constexpr BoxStart start{2000, 100.0, true};
 
-/// Runs the step-size study; returns the observed order. `strict`: assert `least_order` and the
-/// bound at dt/4.
+/// Runs the step-size study; returns the observed order. `strict`: assert `least_order` (unless
+/// `check_order` is false) and the bound at dt/4.
 double check_box(const io::CaseSpec& spec, const std::string& label, bool strict,
-                 double least_order = min_order) {
+                 double least_order = min_order, bool check_order = true) {
     std::vector<double> dts;
     std::vector<double> mean_error;
     double finest_worst = 0.0;
@@ -65,9 +65,11 @@ double check_box(const io::CaseSpec& spec, const std::string& label, bool strict
     }
     const double order = log_slope(dts, mean_error);
     record(label + " observed order (fit over dt..dt/4)", order, 2.0,
-           strict ? 2.0 - least_order : 0, "-");
-    if (strict) {
+           strict && check_order ? 2.0 - least_order : 0, "-");
+    if (strict && check_order) {
         EXPECT_GE(order, least_order) << label;
+    }
+    if (strict) {
         EXPECT_LT(finest_worst, finest_bound) << label;
     }
     return order;
@@ -91,6 +93,17 @@ TEST(BodyEnergy, ClumpsConserveEnergyAtSecondOrder) {
 
 TEST(BodyEnergy, SuperquadricsConserveEnergyAtSecondOrderWithTheLinearLaw) {
     check_box(with_law(load_case("case_superquadrics.toml"), false), "superquadrics linear", true);
+}
+
+TEST(BodyEnergy, CubesWithSuperquadricsKeepTheEnergyErrorBounded) {
+    // Polyhedron-superquadric pairs (libccd's EPA, the refined normal; a pair touching at the
+    // last step refined from its last normal) beside cube pairs and superquadric pairs, linear
+    // law. The worst error at dt/4 is bounded as for the other bodies; the order is recorded, not
+    // asserted: cubes alone in the same box measure 0.7 (README, "Cubes with superquadrics").
+    // With the contact point of a polyhedron-superquadric pair midway between the two supports
+    // (before session 20) the error was 1 % at every dt.
+    check_box(with_law(load_case("case_cubes_superquadrics.toml"), false),
+              "cubes and superquadrics linear", true, min_order, false);
 }
 
 io::CaseSpec with_radius(io::CaseSpec spec, dynamics::BodyRadius r) {
