@@ -509,7 +509,7 @@ constexpr double kRefineGap = 1e-3;
 ElementContact polyhedron_superquadric_result(const geometry::PosedSuperquadric& ps,
                                               const Element& s, const Element& p,
                                               const Vec3& normal, double depth, Vec3* sep,
-                                              ElementContact out) {
+                                              bool radius, ElementContact out) {
     if (!(depth > 0.0)) {
         if (sep != nullptr && depth < 0.0) {
             *sep = normal; // a direction with a gap: apart after all
@@ -521,8 +521,10 @@ ElementContact polyhedron_superquadric_result(const geometry::PosedSuperquadric&
     out.normal = normal;
     const Vec3 deepest_s = ps.support(normal);
     out.point = deepest_s - 0.5 * depth * normal;
-    const auto k = s.sq->principal_curvatures(s.q.conjugate() * (deepest_s - s.centre));
-    out.r_eff = effective_radius(k[0], k[1], s, &p);
+    if (radius) {
+        const auto k = s.sq->principal_curvatures(s.q.conjugate() * (deepest_s - s.centre));
+        out.r_eff = effective_radius(k[0], k[1], s, &p);
+    }
     return out;
 }
 
@@ -534,9 +536,10 @@ ElementContact polyhedron_superquadric_result(const geometry::PosedSuperquadric&
 /// flat at the contact (as for a sphere), so R* is the superquadric's, from its principal
 /// curvatures at its deepest point. A sphere element (a clump member) against a polyhedron never
 /// comes here (sphere_polyhedron is exact). A pair that touched at the last step (`touched_last`,
-/// with `warm` its last normal) skips EPA and refines from the last normal.
+/// with `warm` its last normal) skips EPA and refines from the last normal. `radius`: see
+/// element_contact.
 ElementContact polyhedron_superquadric(const Element& p, const Element& s, const Vec3* warm,
-                                       Vec3* sep, bool touched_last) {
+                                       Vec3* sep, bool touched_last, bool radius) {
     ElementContact out;
     const geometry::PosedPolyhedron pp{p.poly, p.centre, p.q};
     const geometry::PosedSuperquadric ps{s.sq, s.centre, s.q};
@@ -585,7 +588,7 @@ ElementContact polyhedron_superquadric(const Element& p, const Element& s, const
         Vec3 normal = *warm;
         double depth = warm_overlap;
         geometry::refine_polyhedron_normal(pp, ps, normal, depth);
-        return polyhedron_superquadric_result(ps, s, p, normal, depth, sep, out);
+        return polyhedron_superquadric_result(ps, s, p, normal, depth, sep, radius, out);
     }
     geometry::ConvexContact cc = geometry::ccd_contact(pp, ps, false);
     if (!cc.converged) {
@@ -616,7 +619,7 @@ ElementContact polyhedron_superquadric(const Element& p, const Element& s, const
     if (cc.repaired || out.fell_back || depth - cc.depth > kRefineGap * depth + 1e-9 * scale) {
         geometry::refine_polyhedron_normal(pp, ps, normal, depth);
     }
-    return polyhedron_superquadric_result(ps, s, p, normal, depth, sep, out);
+    return polyhedron_superquadric_result(ps, s, p, normal, depth, sep, radius, out);
 }
 
 /// Contact point of a polyhedron on a wall: the deepest vertex, or, when several vertices are
@@ -810,7 +813,7 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
 
 ElementContact element_contact(const Element& a, const Element& b, NarrowPhase method,
                                const Vec3* warm, Vec3* separating, bool touched_last,
-                               geometry::PlaneMemo* memo) {
+                               geometry::PlaneMemo* memo, bool radius) {
     // Bounding spheres first: most candidate pairs are apart.
     const double rsum = a.radius + b.radius;
     if ((a.centre - b.centre).squaredNorm() >= rsum * rsum) {
@@ -833,14 +836,14 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
         return c;
     }
     if (poly_a) {
-        return polyhedron_superquadric(a, b, warm, separating, touched_last);
+        return polyhedron_superquadric(a, b, warm, separating, touched_last, radius);
     }
     if (poly_b) { // the same with the roles swapped: directions from a to b
         const Vec3 back = warm != nullptr ? Vec3(-*warm) : Vec3::Zero();
         Vec3 sep_back = separating != nullptr ? Vec3(-*separating) : Vec3::Zero();
-        ElementContact c =
-            polyhedron_superquadric(b, a, warm != nullptr ? &back : nullptr,
-                                    separating != nullptr ? &sep_back : nullptr, touched_last);
+        ElementContact c = polyhedron_superquadric(b, a, warm != nullptr ? &back : nullptr,
+                                                   separating != nullptr ? &sep_back : nullptr,
+                                                   touched_last, radius);
         if (separating != nullptr) {
             *separating = -sep_back;
         }
@@ -938,8 +941,10 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
     out.overlap = cc.depth;
     out.normal = cc.normal;
     out.point = cc.point;
-    const geometry::ContactCurvature k = geometry::contact_curvature(pa, pb, cc);
-    out.r_eff = effective_radius(k.k_min, k.k_max, a, &b);
+    if (radius) {
+        const geometry::ContactCurvature k = geometry::contact_curvature(pa, pb, cc);
+        out.r_eff = effective_radius(k.k_min, k.k_max, a, &b);
+    }
     return out;
 }
 
@@ -955,7 +960,7 @@ double flat_wall_radius(const Element& a, const Vec3& n) {
     return effective_radius(k[0], k[1], a, nullptr);
 }
 
-ElementContact element_wall_contact(const Element& a, const WallShape& w) {
+ElementContact element_wall_contact(const Element& a, const WallShape& w, bool radius) {
     ElementContact out;
     if (a.kind == Element::Kind::sphere) {
         const WallContact g =
@@ -984,6 +989,9 @@ ElementContact element_wall_contact(const Element& a, const WallShape& w) {
     }
     out.touching = true;
     out.point = deepest + 0.5 * out.overlap * out.normal;
+    if (!radius) {
+        return out;
+    }
     const Vec3 p_body = a.q.conjugate() * (deepest - a.centre);
     if (const auto* cyl = std::get_if<CylinderWall>(&w)) {
         out.r_eff = concave_wall_radius(a, p_body, out.normal, cyl->axis, cyl->radius);

@@ -156,10 +156,16 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
 /// `memo` (optional, in and out; read by pairs of polyhedra with the common plane, ignored by
 /// others): the pair's memory of its last search (geometry::PlaneMemo), which lets a resting
 /// contact skip the candidates that cannot win. The answer is the one without it, bit for bit.
+///
+/// `radius`: compute R* (ElementContact::r_eff). A caller that keeps the R* of the contact's first
+/// step (`body_radius = "first_touch"`) passes false for a contact that has one: a superquadric's
+/// R* takes two curvature tensors and an eigen-solve per query. r_eff is then 0; every other
+/// field is the same, bit for bit.
 [[nodiscard]] ElementContact element_contact(const Element& a, const Element& b, NarrowPhase method,
                                              const Vec3* warm, Vec3* separating = nullptr,
                                              bool touched_last = false,
-                                             geometry::PlaneMemo* memo = nullptr);
+                                             geometry::PlaneMemo* memo = nullptr,
+                                             bool radius = true);
 
 /// Is the pair of polyhedron elements a, b apart along `sep` (unit, from b to a, world frame) by
 /// more than the separation margin (1e-10 of the two bounding radii)? The test element_contact
@@ -181,6 +187,8 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
 
 /// Contact of an element with a wall (normal from the wall into the element). A polyhedron's
 /// contact point is its deepest vertex, or the weighted average of the almost equally deep ones.
-[[nodiscard]] ElementContact element_wall_contact(const Element& a, const WallShape& w);
+/// `radius`: compute R* (as for element_contact; without it a superquadric's r_eff is 0).
+[[nodiscard]] ElementContact element_wall_contact(const Element& a, const WallShape& w,
+                                                  bool radius = true);
 
 } // namespace kiln::dynamics

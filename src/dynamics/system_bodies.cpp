@@ -912,9 +912,12 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                             B.kind == Element::Kind::polyhedron) {
                             memo = &plane_memos_[k];
                         }
+                        // R* only where it is read: apply and queue_convex keep the first
+                        // step's with first_touch.
+                        const bool radius = !(first_touch && old != nullptr && old->r_eff > 0.0);
                         const ElementContact ec =
                             element_contact(A, B, spec_.narrow_phase, wants_warm ? &warm : nullptr,
-                                            sep, old != nullptr, memo);
+                                            sep, old != nullptr, memo, radius);
                         ++np_.calls;
                         separation_skips_ += ec.proved_apart ? 1 : 0;
                         np_.fallbacks += ec.fell_back ? 1 : 0;
@@ -1195,19 +1198,25 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         if (single && travel_[a] < wall_apart_below_[c]) {
                             continue;
                         }
-                        const ElementContact ec = element_wall_contact(A, ws);
+                        // A superquadric's R* (a curvature tensor and an eigen-solve) only
+                        // where it is read: with first_touch, at a contact's first step.
+                        const bool lazy = first_touch && A.kind == Element::Kind::superquadric;
+                        ElementContact ec = element_wall_contact(A, ws, !lazy);
                         if (!ec.touching) {
                             if (single && A.kind == Element::Kind::polyhedron) {
                                 wall_apart_below_[c] = travel_[a] + ec.wall_gap - 1e-9 * A.radius;
                             }
                             continue;
                         }
+                        const BodyContact* old = find_old(g, key.eb);
+                        if (lazy && !(old != nullptr && old->r_eff > 0.0)) {
+                            ec = element_wall_contact(A, ws);
+                        }
                         if (convex_blocks_) {
-                            queue_convex(a, -1, key, g, ec, find_old(g, key.eb),
-                                         spec_.walls[w].material,
+                            queue_convex(a, -1, key, g, ec, old, spec_.walls[w].material,
                                          ec.overlap / ratio_size(A, nullptr));
                         } else {
-                            apply(a, -1, key, g, ec, find_old(g, key.eb), spec_.walls[w].material,
+                            apply(a, -1, key, g, ec, old, spec_.walls[w].material,
                                   ec.overlap / ratio_size(A, nullptr), wall_totals);
                         }
                     }
@@ -1239,15 +1248,19 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                             ec.overlap = mc.depth;
                             ec.normal = mc.normal;
                             ec.point = mc.point;
-                            // Flat wall: sphere radius, the polyhedron's equivalent sphere, or
-                            // the superquadric's R* at its deepest point.
-                            ec.r_eff = flat_wall_radius(A, mc.normal);
                             const BodyContactKey key{
                                 p_.id[a], -1 - n_walls - static_cast<std::int64_t>(m),
                                 static_cast<std::int32_t>(ea - a0),
                                 (static_cast<std::int32_t>(mc.feature) << 28) | mc.id};
                             const ContactGroup g{2, static_cast<std::uint32_t>(m), a, ea - a0};
-                            apply(a, -1, key, g, ec, find_old(g, key.eb), mw.material,
+                            const BodyContact* old = find_old(g, key.eb);
+                            // Flat wall: sphere radius, the polyhedron's equivalent sphere, or
+                            // the superquadric's R* at its deepest point (with first_touch only
+                            // at the contact's first step, the one read).
+                            if (!(first_touch && old != nullptr && old->r_eff > 0.0)) {
+                                ec.r_eff = flat_wall_radius(A, mc.normal);
+                            }
+                            apply(a, -1, key, g, ec, old, mw.material,
                                   ec.overlap / ratio_size(A, nullptr), wall_totals);
                         }
                     }

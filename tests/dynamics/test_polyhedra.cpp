@@ -394,6 +394,60 @@ TEST(Polyhedra, CubeFaceOnAnEllipsoidActsAboveTheEllipsoidsDeepestPoint) {
     }
 }
 
+TEST(Polyhedra, ContactsWithoutTheRadiusChangeNothingElse) {
+    // element_contact and element_wall_contact with `radius` false (a contact whose R* of its
+    // first step is kept): r_eff 0, every other field the same bits, for superquadric pairs,
+    // polyhedron-superquadric pairs (from EPA and from a last normal) and a superquadric on a
+    // plane.
+    const geometry::ShapeTemplate cube = shape("cube");
+    const geometry::ShapeTemplate ball = shape("superball");
+    const geometry::ShapeTemplate ell = shape("ellipsoid_123");
+    const geometry::PolyhedronFeatures f =
+        geometry::polyhedron_features(std::get<geometry::ConvexPolyhedron>(cube.shape));
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const auto same = [](const ElementContact& x, const ElementContact& y) {
+        EXPECT_EQ(x.touching, y.touching);
+        EXPECT_EQ(x.overlap, y.overlap);
+        EXPECT_EQ(x.normal, y.normal);
+        EXPECT_EQ(x.point, y.point);
+        EXPECT_EQ(y.r_eff, 0.0);
+    };
+    int touching = 0;
+    for (int k = 0; k < 40; ++k) {
+        const Quat qa(Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()));
+        const Quat qb(Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()));
+        const Vec3 dir = Vec3(u(rng), u(rng), u(rng)).normalized();
+        std::vector<Element> e;
+        append_elements(&ball, nullptr, Vec3::Zero(), qb, ball.bounding_radius(), e);
+        const geometry::PosedSuperquadric pb{e[0].sq, Vec3::Zero(), qb};
+        geometry::PosedPolyhedron pa{&f, Vec3::Zero(), qa};
+        const double reach = dir.dot(pb.support(dir)) - dir.dot(pa.support(-dir) - pa.x);
+        append_elements(&cube, &f, Vec3((reach - 2e-4) * dir), qa, cube.bounding_radius(), e);
+        append_elements(&ell, nullptr, Vec3::Zero(), qa, ell.bounding_radius(), e);
+        e[2].centre = (reach - 2e-4) * dir; // an ellipsoid where the cube is
+        const Vec3 warm = dir;
+        for (const auto& [i, j] : {std::pair{1, 0}, std::pair{0, 1}, std::pair{2, 0}}) {
+            for (const bool last : {false, true}) {
+                const Vec3 w = i == 0 ? Vec3(-warm) : warm;
+                const ElementContact with =
+                    element_contact(e[static_cast<std::size_t>(i)], e[static_cast<std::size_t>(j)],
+                                    NarrowPhase::newton, &w, nullptr, last);
+                const ElementContact without =
+                    element_contact(e[static_cast<std::size_t>(i)], e[static_cast<std::size_t>(j)],
+                                    NarrowPhase::newton, &w, nullptr, last, nullptr, false);
+                same(with, without);
+                touching += with.touching && with.r_eff > 0.0 ? 1 : 0;
+            }
+        }
+        const WallShape floor = PlaneWall{Vec3(0.0, 0.0, -1.2e-3), Vec3::UnitZ()};
+        const ElementContact with = element_wall_contact(e[0], floor);
+        same(with, element_wall_contact(e[0], floor, false));
+        touching += with.touching && with.r_eff > 0.0 ? 1 : 0;
+    }
+    EXPECT_GT(touching, 60);
+}
+
 TEST(Polyhedra, CubeAndSuperballCollideKeepingMomentum) {
     // The pair runs in the step loop: a cube and a superball in one scene collide off-centre;
     // momentum and angular momentum are exchanged pairwise and no query fails.
