@@ -30,9 +30,16 @@ struct SimplexPoint {
 /// the affine minimiser of each whose barycentric weights are all >= 0, keeps the nearest
 /// (the true closest point lies in the relative interior of one face, where it is that face's
 /// affine minimiser). Reduces `s` to the supporting face; `lambda` gets its weights.
-/// Returns false when no sub-simplex qualifies (numerically degenerate).
-bool closest_on_simplex(std::vector<SimplexPoint>& s, std::vector<double>& lambda) {
-    const int n = static_cast<int>(s.size());
+/// Returns false when no sub-simplex qualifies (numerically degenerate). Fixed storage: the
+/// simplex has at most four points, and a heap vector per iteration was a tenth of the query.
+struct Simplex {
+    std::array<SimplexPoint, 4> p{};
+    int n = 0;
+    [[nodiscard]] const SimplexPoint& operator[](std::size_t k) const { return p[k]; }
+};
+
+bool closest_on_simplex(Simplex& s, std::array<double, 4>& lambda) {
+    const int n = s.n;
     double best = std::numeric_limits<double>::infinity();
     int best_mask = 0;
     std::array<double, 4> best_l{};
@@ -93,16 +100,15 @@ bool closest_on_simplex(std::vector<SimplexPoint>& s, std::vector<double>& lambd
     if (best_mask == 0) {
         return false;
     }
-    std::vector<SimplexPoint> kept;
-    lambda.clear();
     int k = 0;
     for (int v = 0; v < n; ++v) {
         if ((best_mask >> v) & 1) {
-            kept.push_back(s[static_cast<std::size_t>(v)]);
-            lambda.push_back(best_l[static_cast<std::size_t>(k++)]);
+            s.p[static_cast<std::size_t>(k)] = s.p[static_cast<std::size_t>(v)]; // k <= v
+            lambda[static_cast<std::size_t>(k)] = best_l[static_cast<std::size_t>(k)];
+            ++k;
         }
     }
-    s = std::move(kept);
+    s.n = k;
     return true;
 }
 
@@ -171,8 +177,8 @@ CoreDistance core_distance(const Core& a, const Core& b, double tolerance) {
         out.overlap = !(out.distance > 0.0);
         return out;
     }
-    std::vector<SimplexPoint> simplex;
-    std::vector<double> lambda;
+    Simplex simplex;
+    std::array<double, 4> lambda{};
     Vec3 v = a.x - b.x; // a point of A - B (both centres are inside their cores)
     if (!(v.squaredNorm() > 0.0)) {
         out.overlap = true;
@@ -187,25 +193,28 @@ CoreDistance core_distance(const Core& a, const Core& b, double tolerance) {
         const double vn = v.norm();
         // |v| is an upper bound of the distance, v.w / |v| a lower bound.
         const double lower = v.dot(sp.w) / vn;
-        if (!simplex.empty() && vn - lower <= tolerance) {
+        if (simplex.n > 0 && vn - lower <= tolerance) {
             break;
         }
-        const bool repeated = std::any_of(simplex.begin(), simplex.end(), [&](const auto& q) {
-            return (q.w - sp.w).squaredNorm() == 0.0;
-        });
+        const bool repeated =
+            std::any_of(simplex.p.begin(), simplex.p.begin() + simplex.n,
+                        [&](const auto& q) { return (q.w - sp.w).squaredNorm() == 0.0; });
         if (repeated) {
             break; // no new support point: v is as near as the supports allow
         }
-        simplex.push_back(sp);
+        simplex.p[static_cast<std::size_t>(simplex.n++)] = sp;
         if (!closest_on_simplex(simplex, lambda)) {
+            // The new point left no usable face: the nearest points come from the simplex and
+            // weights before it (which still give v), not from weights of another simplex.
+            --simplex.n;
             out.converged = false;
             break;
         }
         v = Vec3::Zero();
-        for (std::size_t k = 0; k < simplex.size(); ++k) {
+        for (std::size_t k = 0; k < static_cast<std::size_t>(simplex.n); ++k) {
             v += lambda[k] * simplex[k].w;
         }
-        if (simplex.size() == 4 || v.norm() <= tolerance) {
+        if (simplex.n == 4 || v.norm() <= tolerance) {
             out.overlap = true; // the origin is in A - B (to the tolerance)
             return out;
         }
@@ -215,7 +224,7 @@ CoreDistance core_distance(const Core& a, const Core& b, double tolerance) {
     }
     out.a = Vec3::Zero();
     out.b = Vec3::Zero();
-    for (std::size_t k = 0; k < simplex.size(); ++k) {
+    for (std::size_t k = 0; k < static_cast<std::size_t>(simplex.n); ++k) {
         out.a += lambda[k] * simplex[k].a;
         out.b += lambda[k] * simplex[k].b;
     }
