@@ -903,9 +903,31 @@ ElementContact element_contact(const Element& a, const Element& b, NarrowPhase m
                 return out;
             }
         }
-        cc = geometry::support_newton_contact(pa, pb, warm, {},
+        // A pair that touched at the last step starts from its last normal; where that run
+        // stalls, its direction is finished below instead of by the cold start (four runs of up
+        // to 100 iterations: for superballs a third of Newton's iterations, a quarter of them
+        // failing too; docs/performance.md, "Session 20").
+        geometry::NewtonSettings settings;
+        settings.cold_after_warm = !(touched_last && warm != nullptr);
+        cc = geometry::support_newton_contact(pa, pb, warm, settings,
                                               warm != nullptr ? &warm_supports : nullptr);
-        if (!cc.converged) {
+        if (!cc.converged && !settings.cold_after_warm) {
+            // The stalled warm run: GJK's distance decides whether the bodies touch, and the
+            // translation rounds of depth_refinement.hpp finish its direction (the overlap along
+            // the result, an upper bound of the MTD, never above that along the stalled one).
+            out.fell_back = true;
+            Vec3 v;
+            if (geometry::shortest_vector(pa, pb, Vec3::Zero(), v)) {
+                out.converged = true;
+                return out;
+            }
+            double depth = depth_along(pa, pb, cc.normal);
+            geometry::refine_normal(pa, pb, cc.normal, depth);
+            cc.converged = true;
+            cc.depth = depth;
+            cc.touching = depth > 0.0;
+            cc.set_deepest(pa.support(-cc.normal), pb.support(cc.normal));
+        } else if (!cc.converged) {
             // Newton stalled (near flat faces the support map is ill-conditioned and its gradient
             // test may not be met). Its last direction and GJK/EPA's normal both give an exact
             // upper bound of the MTD when f is evaluated there with the analytic supports; the

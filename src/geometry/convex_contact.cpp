@@ -278,11 +278,11 @@ ConvexContact support_newton_contact(const PosedSuperquadric& a, const PosedSupe
                 ? m.newton(n0, m.eval_from(n0, (*warm_supports)[0], (*warm_supports)[1]),
                            iterations)
                 : m.newton(n0, iterations);
-        if (end.ok) {
+        if (end.ok || !settings.cold_after_warm) {
             ConvexContact c;
             c.depth = end.e.f;
             c.normal = -end.n;
-            c.converged = true;
+            c.converged = end.ok;
             c.iterations = iterations;
             c.touching = c.depth > 0.0;
             c.set_deepest(end.e.sa, end.e.sb);

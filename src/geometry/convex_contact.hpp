@@ -142,6 +142,11 @@ struct NewtonSettings {
     /// (their inverses, the curvature radii, summed) instead of differences; differences where a
     /// point is nearly flat or a tip, and for pairs with an exponent below 0.5 (blocky).
     bool analytic_hessian = true;
+    /// When the run from a warm normal fails, run the cold start (27 directions, Newton from the
+    /// best 4, up to 100 iterations each). false: return the failed run's last direction and f,
+    /// unconverged, for the caller to finish (element_contact does so for a pair that touched at
+    /// the last step: its stalled direction is near the best one).
+    bool cold_after_warm = true;
 };
 
 /// Newton's method on the sphere of directions (convex_contact.cpp). Without `warm_normal` it
