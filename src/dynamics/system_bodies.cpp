@@ -324,6 +324,11 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
     };
     const auto is_convex = [](const Element& e) { return e.kind != Element::Kind::sphere; };
     const bool first_touch = spec_.body_radius == BodyRadius::first_touch;
+    // Does a contact keep the R* of its first step (first_touch, and it has one)? Then the
+    // contact's R* is read from `old`, and the narrow phase need not compute it.
+    const auto keeps_radius = [first_touch](const BodyContact* old) {
+        return first_touch && old != nullptr && old->r_eff > 0.0;
+    };
     // Elements of every particle, posed once per step: centre and radius of every element in
     // member_c_ (radius 0: not a sphere), the full Element in elements_ only for superquadrics
     // and polyhedra (the slots of sphere elements are not written: element() builds those).
@@ -439,8 +444,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 // R*: with first_touch, the value of the contact's first step (constant R* makes
                 // the Hertz force the gradient of a potential; docs/theory/contact.md). Contacts
                 // without a superquadric have a constant R* anyway.
-                const double r_eff =
-                    first_touch && old != nullptr && old->r_eff > 0.0 ? old->r_eff : ec.r_eff;
+                const double r_eff = keeps_radius(old) ? old->r_eff : ec.r_eff;
                 // Lever arms 0: v_rel is already the velocity of the contact point. The angular
                 // velocities only feed the rolling resistance (a couple, torque_i and torque_j).
                 const Vec3 wb = b >= 0 ? p_.omega[static_cast<std::uint32_t>(b)] : Vec3::Zero();
@@ -566,8 +570,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     m_eff = p_.mass[a] * p_.mass[j] / (p_.mass[a] + p_.mass[j]);
                     wb = p_.omega[j];
                 }
-                const double r_eff =
-                    first_touch && old != nullptr && old->r_eff > 0.0 ? old->r_eff : ec.r_eff;
+                const double r_eff = keeps_radius(old) ? old->r_eff : ec.r_eff;
                 const std::size_t q = x_queued;
                 for (int c = 0; c < 3; ++c) {
                     xb.n[c][q] = ec.normal[c];
@@ -692,8 +695,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             const auto queue_wall = [&](std::uint32_t a, double size, const ElementContact& ec,
                                         int material_w, const BodyContactKey& key,
                                         const ContactGroup& g, const BodyContact* old) {
-                const double r_eff =
-                    first_touch && old != nullptr && old->r_eff > 0.0 ? old->r_eff : ec.r_eff;
+                const double r_eff = keeps_radius(old) ? old->r_eff : ec.r_eff;
                 const Vec3 ra = ec.point - p_.x[a];
                 const Vec3 v_rel = p_.v[a] + p_.omega[a].cross(ra);
                 const std::size_t q = queued;
@@ -914,7 +916,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         }
                         // R* only where it is read: apply and queue_convex keep the first
                         // step's with first_touch.
-                        const bool radius = !(first_touch && old != nullptr && old->r_eff > 0.0);
+                        const bool radius = !keeps_radius(old);
                         const ElementContact ec =
                             element_contact(A, B, spec_.narrow_phase, wants_warm ? &warm : nullptr,
                                             sep, old != nullptr, memo, radius);
@@ -1209,7 +1211,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                             continue;
                         }
                         const BodyContact* old = find_old(g, key.eb);
-                        if (lazy && !(old != nullptr && old->r_eff > 0.0)) {
+                        if (lazy && !keeps_radius(old)) {
                             ec = element_wall_contact(A, ws);
                         }
                         if (convex_blocks_) {
@@ -1257,7 +1259,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                             // Flat wall: sphere radius, the polyhedron's equivalent sphere, or
                             // the superquadric's R* at its deepest point (with first_touch only
                             // at the contact's first step, the one read).
-                            if (!(first_touch && old != nullptr && old->r_eff > 0.0)) {
+                            if (!keeps_radius(old)) {
                                 ec.r_eff = flat_wall_radius(A, mc.normal);
                             }
                             apply(a, -1, key, g, ec, old, mw.material,

@@ -26,18 +26,19 @@ struct SimplexPoint {
     Vec3 b;
 };
 
-/// Closest point to the origin of the simplex `s` (1-4 points): tries every sub-simplex, takes
-/// the affine minimiser of each whose barycentric weights are all >= 0, keeps the nearest
-/// (the true closest point lies in the relative interior of one face, where it is that face's
-/// affine minimiser). Reduces `s` to the supporting face; `lambda` gets its weights.
-/// Returns false when no sub-simplex qualifies (numerically degenerate). Fixed storage: the
-/// simplex has at most four points, and a heap vector per iteration was a tenth of the query.
+/// A GJK simplex in fixed storage (at most four points; a heap vector per iteration was a tenth
+/// of the query).
 struct Simplex {
     std::array<SimplexPoint, 4> p{};
     int n = 0;
     [[nodiscard]] const SimplexPoint& operator[](std::size_t k) const { return p[k]; }
 };
 
+/// Closest point to the origin of the simplex `s` (1-4 points): tries every sub-simplex, takes
+/// the affine minimiser of each whose barycentric weights are all >= 0, keeps the nearest
+/// (the true closest point lies in the relative interior of one face, where it is that face's
+/// affine minimiser). Reduces `s` to the supporting face; `lambda` gets its weights.
+/// Returns false when no sub-simplex qualifies (numerically degenerate).
 bool closest_on_simplex(Simplex& s, std::array<double, 4>& lambda) {
     const int n = s.n;
     double best = std::numeric_limits<double>::infinity();
