@@ -235,6 +235,34 @@ template <class A, class B> double brute_mtd(const A& a, const B& b, Vec3& best_
     return best;
 }
 
+/// A cube pressed into a superball in a random pose: the ball (element 0) at the origin, the
+/// cube (element 1) along a random unit direction `dir` where the two supports along it overlap
+/// by 2e-4 m, and both as posed bodies (for brute_mtd). Draws the cube's and the ball's
+/// orientations and `dir` from `rng`, in that order.
+struct CubeInBall {
+    std::vector<Element> e;
+    geometry::PosedPolyhedron cube;
+    geometry::PosedSuperquadric ball;
+    Vec3 dir;
+};
+
+CubeInBall cube_pressed_into_ball(const geometry::ShapeTemplate& cube,
+                                  const geometry::PolyhedronFeatures& f,
+                                  const geometry::ShapeTemplate& ball, std::mt19937& rng) {
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const Quat qa(Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()));
+    const Quat qb(Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()));
+    const Vec3 dir = Vec3(u(rng), u(rng), u(rng)).normalized();
+    std::vector<Element> e;
+    append_elements(&ball, nullptr, Vec3::Zero(), qb, ball.bounding_radius(), e);
+    const geometry::PosedSuperquadric pb{e[0].sq, Vec3::Zero(), qb};
+    geometry::PosedPolyhedron pa{&f, Vec3::Zero(), qa};
+    const double reach = dir.dot(pb.support(dir)) - dir.dot(pa.support(-dir) - pa.x);
+    pa.x = (reach - 2e-4) * dir;
+    append_elements(&cube, &f, pa.x, qa, cube.bounding_radius(), e);
+    return {std::move(e), pa, pb, dir};
+}
+
 } // namespace
 
 TEST(Polyhedra, CubeOnAnEllipsoidWhereEpaCyclesFallsBackToMpr) {
@@ -275,22 +303,12 @@ TEST(Polyhedra, CubeOnASuperballMatchesBruteForce) {
     const geometry::PolyhedronFeatures f =
         geometry::polyhedron_features(std::get<geometry::ConvexPolyhedron>(cube.shape));
     std::mt19937 rng(5);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
     int touching = 0;
     for (int k = 0; k < 60; ++k) {
-        const Quat qa(Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()));
-        const Quat qb(Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()));
-        const Vec3 dir = Vec3(u(rng), u(rng), u(rng)).normalized();
-        std::vector<Element> e;
-        append_elements(&ball, nullptr, Vec3::Zero(), qb, ball.bounding_radius(), e);
-        // Cube centre along dir at a distance where the supports just overlap by ~0.05 mm.
-        const geometry::PosedSuperquadric pb{e[0].sq, Vec3::Zero(), qb};
-        geometry::PosedPolyhedron pa{&f, Vec3::Zero(), qa};
-        const double reach = dir.dot(pb.support(dir)) - dir.dot(pa.support(-dir) - pa.x);
-        pa.x = (reach - 2e-4) * dir;
-        append_elements(&cube, &f, pa.x, qa, cube.bounding_radius(), e);
+        const CubeInBall pose = cube_pressed_into_ball(cube, f, ball, rng);
+        const std::vector<Element>& e = pose.e;
         Vec3 n_ref = Vec3::UnitX();
-        const double mtd = brute_mtd(pa, pb, n_ref);
+        const double mtd = brute_mtd(pose.cube, pose.ball, n_ref);
         for (const bool swap : {false, true}) {
             const ElementContact c =
                 swap ? element_contact(e[0], e[1], NarrowPhase::newton, nullptr)
@@ -323,21 +341,12 @@ TEST(Polyhedra, PersistentCubeOnASuperballMatchesBruteForce) {
     const geometry::PolyhedronFeatures f =
         geometry::polyhedron_features(std::get<geometry::ConvexPolyhedron>(cube.shape));
     std::mt19937 rng(7);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
     int touching = 0;
     for (int k = 0; k < 60; ++k) {
-        const Quat qa(Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()));
-        const Quat qb(Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()));
-        const Vec3 dir = Vec3(u(rng), u(rng), u(rng)).normalized();
-        std::vector<Element> e;
-        append_elements(&ball, nullptr, Vec3::Zero(), qb, ball.bounding_radius(), e);
-        const geometry::PosedSuperquadric pb{e[0].sq, Vec3::Zero(), qb};
-        geometry::PosedPolyhedron pa{&f, Vec3::Zero(), qa};
-        const double reach = dir.dot(pb.support(dir)) - dir.dot(pa.support(-dir) - pa.x);
-        pa.x = (reach - 2e-4) * dir;
-        append_elements(&cube, &f, pa.x, qa, cube.bounding_radius(), e);
+        const CubeInBall pose = cube_pressed_into_ball(cube, f, ball, rng);
+        const std::vector<Element>& e = pose.e;
         Vec3 n_ref = Vec3::UnitX();
-        const double mtd = brute_mtd(pa, pb, n_ref);
+        const double mtd = brute_mtd(pose.cube, pose.ball, n_ref);
         if (!(mtd > 0.0)) {
             continue;
         }
@@ -405,7 +414,6 @@ TEST(Polyhedra, ContactsWithoutTheRadiusChangeNothingElse) {
     const geometry::PolyhedronFeatures f =
         geometry::polyhedron_features(std::get<geometry::ConvexPolyhedron>(cube.shape));
     std::mt19937 rng(11);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
     const auto same = [](const ElementContact& x, const ElementContact& y) {
         EXPECT_EQ(x.touching, y.touching);
         EXPECT_EQ(x.overlap, y.overlap);
@@ -415,18 +423,11 @@ TEST(Polyhedra, ContactsWithoutTheRadiusChangeNothingElse) {
     };
     int touching = 0;
     for (int k = 0; k < 40; ++k) {
-        const Quat qa(Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()));
-        const Quat qb(Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()));
-        const Vec3 dir = Vec3(u(rng), u(rng), u(rng)).normalized();
-        std::vector<Element> e;
-        append_elements(&ball, nullptr, Vec3::Zero(), qb, ball.bounding_radius(), e);
-        const geometry::PosedSuperquadric pb{e[0].sq, Vec3::Zero(), qb};
-        geometry::PosedPolyhedron pa{&f, Vec3::Zero(), qa};
-        const double reach = dir.dot(pb.support(dir)) - dir.dot(pa.support(-dir) - pa.x);
-        append_elements(&cube, &f, Vec3((reach - 2e-4) * dir), qa, cube.bounding_radius(), e);
-        append_elements(&ell, nullptr, Vec3::Zero(), qa, ell.bounding_radius(), e);
-        e[2].centre = (reach - 2e-4) * dir; // an ellipsoid where the cube is
-        const Vec3 warm = dir;
+        CubeInBall pose = cube_pressed_into_ball(cube, f, ball, rng);
+        std::vector<Element>& e = pose.e;
+        append_elements(&ell, nullptr, Vec3::Zero(), pose.cube.q, ell.bounding_radius(), e);
+        e[2].centre = pose.cube.x; // an ellipsoid where the cube is
+        const Vec3 warm = pose.dir;
         for (const auto& [i, j] : {std::pair{1, 0}, std::pair{0, 1}, std::pair{2, 0}}) {
             for (const bool last : {false, true}) {
                 const Vec3 w = i == 0 ? Vec3(-warm) : warm;
