@@ -4,17 +4,20 @@
 // transient (and different contact counts). Here both run the same steps: `warmup` untimed steps,
 // then `steps` timed ones (process CPU time, s). Prints CPU time per step, contacts per particle,
 // CPU time per contact (particle and wall contacts) and a checksum of the final positions (m,
-// world frame), equal between builds that give the same bits.
+// world frame), equal between builds that give the same bits, and last the wall-clock time per
+// step (ms; the figure that threads shorten, where the CPU time sums over the threads).
 //
 // build/bench/kiln_scene_steps KIND WARMUP STEPS (KILN_PLANE_MEMO=0 in the environment: without
-// the polyhedron pairs' memory), KIND: sphere, sq08, sq03 (superquadrics of
-// e = 0.8, 0.3) or a shipped shape name (cube, icosahedron, cylinder_16, cylinder_12, ...).
+// the polyhedron pairs' memory; KILN_SCENE_THREADS=N: N threads, default 1), KIND: sphere, sq08,
+// sq03 (superquadrics of e = 0.8, 0.3) or a shipped shape name (cube, icosahedron, cylinder_16,
+// cylinder_12, ...).
 
 #include "geometry/polyhedron_contact.hpp"
 #include "geometry/superquadric.hpp"
 #include "io/shape_reader.hpp"
 #include "lattice_scene.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
@@ -26,6 +29,12 @@ namespace {
 double cpu_seconds() {
     timespec t{};
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+double wall_seconds() {
+    timespec t{};
+    clock_gettime(CLOCK_MONOTONIC, &t);
     return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
@@ -53,7 +62,11 @@ int main(int argc, char** argv) {
     const std::string kind = argv[1];
     const int warmup = std::atoi(argv[2]);
     const int steps = std::atoi(argv[3]);
-    kiln::dynamics::System sys(scene(kind));
+    kiln::dynamics::SceneSpec spec = scene(kind);
+    if (const char* threads = std::getenv("KILN_SCENE_THREADS"); threads != nullptr) {
+        spec.threads = std::max(1, std::atoi(threads));
+    }
+    kiln::dynamics::System sys(spec);
     // KILN_PLANE_MEMO=0: without the polyhedron pairs' memory (same bits, for A/B in one binary).
     const char* memo_env = std::getenv("KILN_PLANE_MEMO");
     sys.use_plane_memo(memo_env == nullptr || std::string(memo_env) != "0");
@@ -62,20 +75,23 @@ int main(int argc, char** argv) {
     }
     long contacts = 0;
     const double t0 = cpu_seconds();
+    const double w0 = wall_seconds();
     for (int k = 0; k < steps; ++k) {
         sys.step();
         contacts += sys.counters().particle_contacts + sys.counters().wall_contacts;
     }
     const double t = cpu_seconds() - t0;
+    const double w = wall_seconds() - w0;
     double checksum = 0.0;
     for (const kiln::Vec3& x : sys.particles().x) {
         checksum += x.x() + 2.0 * x.y() + 3.0 * x.z();
     }
     const double n = static_cast<double>(sys.particles().size());
     std::printf("%s cpu_ms_per_step %.4f contacts_per_particle %.4f cpu_ns_per_contact %.1f "
-                "checksum %.17g\n",
+                "checksum %.17g wall_ms_per_step %.4f\n",
                 kind.c_str(), 1e3 * t / steps, static_cast<double>(contacts) / (n * steps),
-                contacts > 0 ? 1e9 * t / static_cast<double>(contacts) : 0.0, checksum);
+                contacts > 0 ? 1e9 * t / static_cast<double>(contacts) : 0.0, checksum,
+                1e3 * w / steps);
     const auto& memo = kiln::geometry::plane_memo_counters();
     std::fprintf(stderr, "plane memo: %ld queries tried it, %ld answered, %ld refills\n",
                  memo.tried, memo.answered, memo.refills);

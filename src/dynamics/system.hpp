@@ -462,6 +462,28 @@ class System {
     };
     std::vector<MemberSphere> member_c_;
     std::vector<std::uint32_t> member_hits_; // this step's touching member pairs (scratch)
+    // With several threads, the narrow phase of the hits between two single-element particles
+    // (one of them convex) runs ahead of body_forces' serial pass, in parallel (scratch, one per
+    // hit): its counts, and the contact the serial pass then hands to the law in its own order.
+    // Each such query reads and writes only its own list entry's state (cached direction, proof,
+    // plane memory), so the answers are the serial route's, bit for bit.
+    struct NarrowCounts {
+        long calls = 0;     // narrow-phase queries (np_.calls)
+        long skips = 0;     // proved apart by a cached direction (separation_skips_)
+        long fallbacks = 0; // np_.fallbacks
+        long failures = 0;  // np_.failures
+    };
+    struct AheadPair {
+        bool ready = false;    // computed ahead (else the serial pass runs the query)
+        bool touching = false; // a contact for the law
+        std::uint32_t a = 0, b = 0;
+        BodyContactKey key{};
+        ElementContact ec;
+        const BodyContact* old = nullptr; // last step's record of the contact, or none
+        double ratio = 0.0;               // overlap / ratio_size
+        NarrowCounts counts;
+    };
+    std::vector<AheadPair> ahead_;
     // A body's elements near a plane or cylinder wall (scratch of body_forces' wall pass).
     std::vector<std::uint32_t> wall_hits_;
     std::vector<std::uint32_t> element_begin_; // particle i: [begin[i], begin[i + 1])

@@ -766,30 +766,44 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // Pairs: the particle with the smaller id is a, so keys and histories do not depend
             // on the list's owner/partner order. The general route for entry k (a and b already
             // ordered): bounding spheres, the elements of each that reach the other, then every
-            // element pair through the narrow phase (sphere pairs through the queue).
-            std::vector<std::uint32_t> near_b;
-            const auto general_entry = [&](std::uint32_t k, std::uint32_t a, std::uint32_t b) {
+            // element pair through the narrow phase (sphere pairs through the queue). An entry of
+            // two single-element particles, one of them convex, takes single_query below.
+            //
+            // Does entry (a, b) take single_query: one element on each side, at least one of them
+            // not a sphere (polyhedron, superquadric)? Its query reads the poses and last step's
+            // records, and writes only the entry's own state (cached direction, proof, near-miss
+            // bound, plane memory), so it may run ahead of the serial pass on another thread.
+            const auto single_convex = [&](std::uint32_t a, std::uint32_t b) {
+                const std::uint32_t a0 = element_begin_[a];
+                const std::uint32_t b0 = element_begin_[b];
+                return element_begin_[a + 1] - a0 == 1 && element_begin_[b + 1] - b0 == 1 &&
+                       (!(member_c_[a0].r > 0.0) || !(member_c_[b0].r > 0.0));
+            };
+            // The query of entry k (single_convex): the general route's bounding-sphere tests,
+            // the cached direction's proof, the narrow phase. The counts go to out.counts, a
+            // contact for the law to `out` (touching). `lookup(g, eb)`: last step's record
+            // (find_old in the serial pass, old_record ahead of it).
+            const auto single_query = [&](std::uint32_t k, std::uint32_t a, std::uint32_t b,
+                                          const auto& lookup, AheadPair& out) {
+                NarrowCounts& n = out.counts;
+                out.touching = false;
                 const double rsum = p_.radius[a] + p_.radius[b];
                 if ((p_.x[a] - p_.x[b]).squaredNorm() >= rsum * rsum) {
                     return;
                 }
                 const std::uint32_t a0 = element_begin_[a];
                 const std::uint32_t b0 = element_begin_[b];
-                // One convex element on each side (polyhedra, superquadrics): the entry keeps the
-                // direction that separated the pair last (docs/architecture.md, "Separating
-                // directions"); it only saves work, the answer is the same without it.
-                const bool single =
-                    element_begin_[a + 1] - a0 == 1 && element_begin_[b + 1] - b0 == 1;
-                // Two single polyhedra with a cached direction (apart at their last query): the
-                // bounding-sphere tests of the loop below, in its order, then the cached
-                // direction's test as element_contact runs it, without copying the elements or
-                // assembling the query (most such entries are near misses proved apart here).
-                // Otherwise the loop below runs as before.
-                if (single && separation_cache_ && !(member_c_[a0].r > 0.0) &&
-                    !(member_c_[b0].r > 0.0) && sep_dirs_[k].squaredNorm() > 0.0) {
+                // Two polyhedra with a cached direction (apart at their last query): the
+                // bounding-sphere tests below, in their order, then the cached direction's test
+                // as element_contact runs it, without assembling the query (most such entries
+                // are near misses proved apart here). The entry keeps the direction that
+                // separated the pair last (docs/architecture.md, "Separating directions"); it
+                // only saves work, the answer is the same without it.
+                if (separation_cache_ && sep_dirs_[k].squaredNorm() > 0.0) {
                     const Element& A = elements_[a0];
                     const Element& B = elements_[b0];
-                    if (A.kind == Element::Kind::polyhedron &&
+                    if (!(member_c_[a0].r > 0.0) && !(member_c_[b0].r > 0.0) &&
+                        A.kind == Element::Kind::polyhedron &&
                         B.kind == Element::Kind::polyhedron) {
                         const double rb = B.radius + p_.radius[a];
                         if (!((B.centre - p_.x[a]).squaredNorm() < rb * rb)) {
@@ -803,7 +817,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         if ((A.centre - B.centre).squaredNorm() >= re * re) {
                             return; // bounding spheres apart: no contact, no history
                         }
-                        if (find_old(ContactGroup(0, k, 0, 0), 0) == nullptr) {
+                        if (lookup(ContactGroup(0, k, 0, 0), 0) == nullptr) {
                             // The proof of an earlier step, moved to this pose: a vertex's height
                             // along the direction m changes by at most the body's rotation
                             // since (|R - R0| <= 2 min |q -+ q0|) times its farthest vertex, so
@@ -825,8 +839,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                                                      A.poly->radius * turn(A.q, proof.qa) +
                                                      B.poly->radius * turn(B.q, proof.qb);
                                 if (bound < -margin) {
-                                    ++np_.calls; // the counts of element_contact's answer
-                                    ++separation_skips_;
+                                    ++n.calls; // the counts of element_contact's answer
+                                    ++n.skips;
                                     apart_below_[k] =
                                         travel_[a] + travel_[b] - bound - 2.0 * margin;
                                     return;
@@ -835,14 +849,110 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                             double overlap = 0.0;
                             if (polyhedra_apart_along(A, B, m, overlap)) {
                                 proof = {true, overlap, along, A.q, B.q};
-                                ++np_.calls;
-                                ++separation_skips_;
+                                ++n.calls;
+                                ++n.skips;
                                 apart_below_[k] = travel_[a] + travel_[b] - overlap - 2.0 * margin;
                                 return;
                             }
                         }
                     }
                 }
+                sep_proofs_[k].valid = false; // the full route may change the direction
+                apart_below_[k] = -std::numeric_limits<double>::infinity();
+                // The general route's tests for its one element pair: b's element within a's
+                // bounding sphere, a's within b's, the elements' bounding spheres.
+                const Element B = element(b0);
+                const double rb = B.radius + p_.radius[a];
+                if (!((B.centre - p_.x[a]).squaredNorm() < rb * rb)) {
+                    return;
+                }
+                const Element A = element(a0);
+                const double rab = A.radius + p_.radius[b];
+                if ((A.centre - p_.x[b]).squaredNorm() >= rab * rab) {
+                    return;
+                }
+                const double re = A.radius + B.radius;
+                if ((A.centre - B.centre).squaredNorm() >= re * re) {
+                    return; // bounding spheres apart: no contact, no history
+                }
+                const BodyContactKey key{p_.id[a], p_.id[b], 0, 0};
+                const BodyContact* old = lookup(ContactGroup(0, k, 0, 0), key.eb);
+                // Warm start: the last normal, else the line of centres. Only pairs with a
+                // superquadric read it (a square root and a division saved for every
+                // polyhedron query).
+                const bool wants_warm =
+                    A.kind == Element::Kind::superquadric || B.kind == Element::Kind::superquadric;
+                Vec3 warm = Vec3::UnitZ();
+                if (wants_warm) {
+                    const Vec3 guess = old != nullptr ? old->normal : Vec3(A.centre - B.centre);
+                    if (guess.squaredNorm() > 0.0) {
+                        warm = guess.normalized();
+                    }
+                }
+                Vec3* sep = nullptr;
+                if (separation_cache_) {
+                    sep = &sep_dirs_[k];
+                    if (old != nullptr) { // touching at the last step: no search
+                        sep->setZero();
+                        sep = nullptr;
+                    }
+                }
+                geometry::PlaneMemo* memo = nullptr;
+                if (plane_memo_ && old != nullptr && A.kind == Element::Kind::polyhedron &&
+                    B.kind == Element::Kind::polyhedron) {
+                    memo = &plane_memos_[k];
+                }
+                // R* only where it is read: apply and queue_convex keep the first step's with
+                // first_touch.
+                const bool radius = !keeps_radius(old);
+                const ElementContact ec =
+                    element_contact(A, B, spec_.narrow_phase, wants_warm ? &warm : nullptr, sep,
+                                    old != nullptr, memo, radius);
+                ++n.calls;
+                n.skips += ec.proved_apart ? 1 : 0;
+                n.fallbacks += ec.fell_back ? 1 : 0;
+                n.failures += ec.converged ? 0 : 1;
+                if (ec.touching) {
+                    out.touching = true;
+                    out.a = a;
+                    out.b = b;
+                    out.key = key;
+                    out.ec = ec;
+                    out.old = old;
+                    out.ratio = ec.overlap / ratio_size(A, &B);
+                }
+            };
+            // The counts and the contact of a single_query, taken in the serial order.
+            const auto take_single = [&](std::uint32_t k, const AheadPair& s) {
+                np_.calls += s.counts.calls;
+                separation_skips_ += s.counts.skips;
+                np_.fallbacks += s.counts.fallbacks;
+                np_.failures += s.counts.failures;
+                if (!s.touching) {
+                    return;
+                }
+                const ContactGroup g(0, k, 0, 0);
+                if (convex_blocks_) {
+                    queue_convex(s.a, s.b, s.key, g, s.ec, s.old, p_.material[s.b], s.ratio);
+                } else {
+                    apply(s.a, s.b, s.key, g, s.ec, s.old, p_.material[s.b], s.ratio, pair_totals);
+                }
+            };
+            AheadPair one; // the serial pass's single_query
+            std::vector<std::uint32_t> near_b;
+            const auto general_entry = [&](std::uint32_t k, std::uint32_t a, std::uint32_t b) {
+                if (single_convex(a, b)) {
+                    one.counts = {};
+                    single_query(k, a, b, find_old, one);
+                    take_single(k, one);
+                    return;
+                }
+                const double rsum = p_.radius[a] + p_.radius[b];
+                if ((p_.x[a] - p_.x[b]).squaredNorm() >= rsum * rsum) {
+                    return;
+                }
+                const std::uint32_t a0 = element_begin_[a];
+                const std::uint32_t b0 = element_begin_[b];
                 sep_proofs_[k].valid = false; // the full route may change the direction
                 apart_below_[k] = -std::numeric_limits<double>::infinity();
                 // Elements of b that reach into a's bounding sphere (a clump pair touches with a
@@ -900,26 +1010,14 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                                 warm = guess.normalized();
                             }
                         }
-                        Vec3* sep = nullptr;
-                        if (single && separation_cache_) {
-                            sep = &sep_dirs_[k];
-                            if (old != nullptr) { // touching at the last step: no search
-                                sep->setZero();
-                                sep = nullptr;
-                            }
-                        }
-                        geometry::PlaneMemo* memo = nullptr;
-                        if (single && plane_memo_ && old != nullptr &&
-                            A.kind == Element::Kind::polyhedron &&
-                            B.kind == Element::Kind::polyhedron) {
-                            memo = &plane_memos_[k];
-                        }
+                        // A clump's member against a convex body: no cached direction nor
+                        // plane memory (those are per entry, for single elements).
                         // R* only where it is read: apply and queue_convex keep the first
                         // step's with first_touch.
                         const bool radius = !keeps_radius(old);
                         const ElementContact ec =
                             element_contact(A, B, spec_.narrow_phase, wants_warm ? &warm : nullptr,
-                                            sep, old != nullptr, memo, radius);
+                                            nullptr, old != nullptr, nullptr, radius);
                         ++np_.calls;
                         separation_skips_ += ec.proved_apart ? 1 : 0;
                         np_.fallbacks += ec.fell_back ? 1 : 0;
@@ -1062,14 +1160,52 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     ++separation_skips_;
                 }
             }
+            // With several threads, the queries of the single_convex entries run first, in
+            // parallel, and the serial pass below takes their counts and contacts in its order.
+            // Each query reads the poses and last step's records (found by a search of the
+            // sorted table instead of the serial pass's cursor) and writes only its own entry's
+            // state, so the answers do not depend on the threads or their order. A query that
+            // throws is left to the serial pass, which runs it again in order.
+            const bool ahead = threads_ > 1 && n_hits > 1;
+            if (ahead) {
+                ahead_.resize(n_hits);
+                const auto old_record = [&](const ContactGroup& g,
+                                            std::int32_t eb) -> const BodyContact* {
+                    auto r = std::lower_bound(body_groups_.begin(), body_groups_.end(), g);
+                    for (; r != body_groups_.end() && *r == g; ++r) {
+                        const auto i = static_cast<std::size_t>(r - body_groups_.begin());
+                        if (body_contacts_[i].key.eb == eb) {
+                            return &body_contacts_[i].contact;
+                        }
+                    }
+                    return nullptr;
+                };
+                const auto hits = static_cast<std::ptrdiff_t>(n_hits);
+#pragma omp parallel for num_threads(threads_) schedule(dynamic, 16)
+                for (std::ptrdiff_t h = 0; h < hits; ++h) {
+                    AheadPair& s = ahead_[static_cast<std::size_t>(h)];
+                    s.ready = false;
+                    const MemberPair& m = member_pairs_[member_hits_[static_cast<std::size_t>(h)]];
+                    if (m.ea != no_element || !single_convex(m.a, m.b)) {
+                        continue;
+                    }
+                    try {
+                        s.counts = {};
+                        single_query(m.k, m.a, m.b, old_record, s);
+                        s.ready = true;
+                    } catch (...) {
+                        s.ready = false;
+                    }
+                }
+            }
             // The memories of the general items a few hits ahead are fetched into the cache
             // (each entry's memory and its block of values lie apart in memory; their loads were
-            // the hottest lines of the memory's route): the structs `ahead` hits ahead, the
+            // the hottest lines of the memory's route): the structs `fetch_ahead` hits ahead, the
             // blocks (their addresses read from the structs fetched) half as far.
-            constexpr std::size_t ahead = 8;
+            constexpr std::size_t fetch_ahead = 8;
             const auto fetch_memo = [&](std::size_t h, bool values) {
-                if (h >= n_hits) {
-                    return;
+                if (ahead || h >= n_hits) {
+                    return; // the queries ran ahead: their memories were read there
                 }
                 const MemberPair& m = member_pairs_[member_hits_[h]];
                 if (m.ea != no_element || m.k >= plane_memos_.size()) {
@@ -1097,18 +1233,22 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     }
                 }
             };
-            for (std::size_t h = 0; h < std::min(ahead, n_hits); ++h) {
+            for (std::size_t h = 0; h < std::min(fetch_ahead, n_hits); ++h) {
                 fetch_memo(h, false);
             }
-            for (std::size_t h = 0; h < std::min(ahead / 2, n_hits); ++h) {
+            for (std::size_t h = 0; h < std::min(fetch_ahead / 2, n_hits); ++h) {
                 fetch_memo(h, true);
             }
             for (std::size_t h = 0; h < n_hits; ++h) {
-                fetch_memo(h + ahead, false);
-                fetch_memo(h + ahead / 2, true);
+                fetch_memo(h + fetch_ahead, false);
+                fetch_memo(h + fetch_ahead / 2, true);
                 const MemberPair& m = member_pairs_[member_hits_[h]];
                 if (m.ea == no_element) {
-                    general_entry(m.k, m.a, m.b);
+                    if (ahead && ahead_[h].ready) {
+                        take_single(m.k, ahead_[h]);
+                    } else {
+                        general_entry(m.k, m.a, m.b);
+                    }
                     continue;
                 }
                 const std::uint32_t i = member_hits_[h];

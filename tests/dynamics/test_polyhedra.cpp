@@ -540,6 +540,43 @@ TEST(Polyhedra, SeparationCacheChangesNoBit) {
                 contacts, with.separation_skips(), with.narrow_phase_counters().calls);
 }
 
+TEST(Polyhedra, OneAndTwoThreadsGiveTheSameBits) {
+    // With two threads the narrow phase of pairs of single convex bodies (polyhedra,
+    // superquadrics, and either against a sphere) runs ahead of the serial pass, in parallel;
+    // each query keeps its entry's cached direction, proof and plane memory. The convex pour gives
+    // the same contacts at every step, the same counts and the same bits as with one thread.
+    SceneSpec one_spec = convex_pour();
+    one_spec.threads = 1;
+    SceneSpec two_spec = convex_pour();
+    two_spec.threads = 2;
+    System one(one_spec);
+    System two(two_spec);
+    ASSERT_EQ(two.threads(), 2);
+    long contacts = 0;
+    ASSERT_NO_FATAL_FAILURE(step_both(two, one, 30000, contacts));
+    EXPECT_GT(contacts, 20000);
+    expect_same_bits(one.particles(), two.particles());
+    EXPECT_EQ(one.counters().wall_contacts, two.counters().wall_contacts);
+    EXPECT_EQ(one.narrow_phase_counters().calls, two.narrow_phase_counters().calls);
+    EXPECT_EQ(one.narrow_phase_counters().fallbacks, two.narrow_phase_counters().fallbacks);
+    EXPECT_EQ(one.narrow_phase_counters().failures, 0);
+    EXPECT_EQ(two.narrow_phase_counters().failures, 0);
+    EXPECT_EQ(one.separation_skips(), two.separation_skips());
+    EXPECT_GT(one.separation_skips(), 100000);
+    // The records of the contacts (read by heat and the output) are the same too.
+    const auto& ra = one.body_contacts();
+    const auto& rb = two.body_contacts();
+    ASSERT_EQ(ra.size(), rb.size());
+    for (std::size_t k = 0; k < ra.size(); ++k) {
+        EXPECT_EQ(ra[k].key.a, rb[k].key.a);
+        EXPECT_EQ(ra[k].key.b, rb[k].key.b);
+        EXPECT_EQ(ra[k].contact.shear, rb[k].contact.shear);
+        EXPECT_EQ(ra[k].contact.force, rb[k].contact.force);
+    }
+    std::printf("%ld contacts, %ld narrow-phase queries, %zu contacts at the end\n", contacts,
+                two.narrow_phase_counters().calls, rb.size());
+}
+
 TEST(Polyhedra, PlaneMemoChangesNoBit) {
     // The memory of a touching polyhedron pair's last common-plane search (geometry::PlaneMemo)
     // only skips candidates that cannot win: the convex pour with it and without it gives the
