@@ -484,6 +484,7 @@ class System {
         NarrowCounts counts;
     };
     std::vector<AheadPair> ahead_;
+    std::vector<AheadPair> wall_ahead_; // the same for body_walls_ (a is the body, b the wall)
     // A body's elements near a plane or cylinder wall (scratch of body_forces' wall pass).
     std::vector<std::uint32_t> wall_hits_;
     std::vector<std::uint32_t> element_begin_; // particle i: [begin[i], begin[i + 1])

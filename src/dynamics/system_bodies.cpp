@@ -1166,20 +1166,20 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // sorted table instead of the serial pass's cursor) and writes only its own entry's
             // state, so the answers do not depend on the threads or their order. A query that
             // throws is left to the serial pass, which runs it again in order.
+            const auto old_record = [&](const ContactGroup& g,
+                                        std::int32_t eb) -> const BodyContact* {
+                auto r = std::lower_bound(body_groups_.begin(), body_groups_.end(), g);
+                for (; r != body_groups_.end() && *r == g; ++r) {
+                    const auto i = static_cast<std::size_t>(r - body_groups_.begin());
+                    if (body_contacts_[i].key.eb == eb) {
+                        return &body_contacts_[i].contact;
+                    }
+                }
+                return nullptr;
+            };
             const bool ahead = threads_ > 1 && n_hits > 1;
             if (ahead) {
                 ahead_.resize(n_hits);
-                const auto old_record = [&](const ContactGroup& g,
-                                            std::int32_t eb) -> const BodyContact* {
-                    auto r = std::lower_bound(body_groups_.begin(), body_groups_.end(), g);
-                    for (; r != body_groups_.end() && *r == g; ++r) {
-                        const auto i = static_cast<std::size_t>(r - body_groups_.begin());
-                        if (body_contacts_[i].key.eb == eb) {
-                            return &body_contacts_[i].contact;
-                        }
-                    }
-                    return nullptr;
-                };
                 const auto hits = static_cast<std::ptrdiff_t>(n_hits);
 #pragma omp parallel for num_threads(threads_) schedule(dynamic, 16)
                 for (std::ptrdiff_t h = 0; h < hits; ++h) {
@@ -1274,11 +1274,113 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
 
             // Walls, body by body and wall by wall: only those within the skin at the last list
             // build can be reached (as for spheres, find_wall_candidates).
+            //
+            // The query of candidate c (body a, wall w) of a body whose one element is convex
+            // (polyhedron, superquadric): the bounding-sphere test, the near-miss bound, the
+            // narrow phase; a contact for the law goes to `out` (touching). It writes only the
+            // candidate's own state (wall_apart_below_), so it may run ahead of the serial pass
+            // on another thread, as single_query does.
+            const auto wall_query = [&](std::uint32_t c, std::uint32_t a, std::uint32_t w,
+                                        const auto& lookup, AheadPair& out) {
+                out.touching = false;
+                const WallShape& ws = spec_.walls[w].shape;
+                const WallContact bound = std::visit(
+                    [&](const auto& s) { return wall_contact(s, p_.x[a], p_.radius[a]); }, ws);
+                if (!(bound.overlap > 0.0)) {
+                    return;
+                }
+                const std::uint32_t ea = element_begin_[a];
+                const Element& A = elements_[ea];
+                // A single polyhedron whose deepest vertex was above this plane wall by more
+                // than the margin: it is still, as long as the body has moved less than that
+                // height since (travel_; the wall is at rest).
+                if (travel_[a] < wall_apart_below_[c]) {
+                    return;
+                }
+                // A superquadric's R* (a curvature tensor and an eigen-solve) only where it is
+                // read: with first_touch, at a contact's first step.
+                const bool lazy = first_touch && A.kind == Element::Kind::superquadric;
+                ElementContact ec = element_wall_contact(A, ws, !lazy);
+                if (!ec.touching) {
+                    if (A.kind == Element::Kind::polyhedron) {
+                        wall_apart_below_[c] = travel_[a] + ec.wall_gap - 1e-9 * A.radius;
+                    }
+                    return;
+                }
+                const BodyContactKey key{p_.id[a], -1 - static_cast<std::int64_t>(w), 0, 0};
+                const BodyContact* old = lookup(ContactGroup{1, a, w, 0}, key.eb);
+                if (lazy && !keeps_radius(old)) {
+                    ec = element_wall_contact(A, ws);
+                }
+                out.touching = true;
+                out.a = a;
+                out.b = w;
+                out.key = key;
+                out.ec = ec;
+                out.old = old;
+                out.ratio = ec.overlap / ratio_size(A, nullptr);
+            };
+            // The contact of a wall_query, taken in the serial order.
+            const auto take_wall = [&](const AheadPair& s) {
+                if (!s.touching) {
+                    return;
+                }
+                const ContactGroup g{1, s.a, s.b, 0};
+                const int material = spec_.walls[s.b].material;
+                if (convex_blocks_) {
+                    queue_convex(s.a, -1, s.key, g, s.ec, s.old, material, s.ratio);
+                } else {
+                    apply(s.a, -1, s.key, g, s.ec, s.old, material, s.ratio, wall_totals);
+                }
+            };
+            // Does body a take wall_query: one element, not a sphere?
+            const auto convex_body = [&](std::uint32_t a) {
+                const std::uint32_t a0 = element_begin_[a];
+                return element_begin_[a + 1] - a0 == 1 && !(member_c_[a0].r > 0.0);
+            };
+            // With several threads, the wall queries of convex bodies run ahead, in parallel.
+            const std::size_t n_candidates = body_walls_.size();
+            const bool walls_ahead = threads_ > 1 && n_candidates > 1;
+            if (walls_ahead) {
+                wall_ahead_.resize(n_candidates);
+                const auto n_bodies = static_cast<std::ptrdiff_t>(bodies_.size());
+#pragma omp parallel for num_threads(threads_) schedule(dynamic, 16)
+                for (std::ptrdiff_t bi = 0; bi < n_bodies; ++bi) {
+                    const auto i = static_cast<std::size_t>(bi);
+                    const std::uint32_t a = bodies_[i];
+                    const bool convex = convex_body(a);
+                    for (std::uint32_t c = body_wall_offsets_[i]; c < body_wall_offsets_[i + 1];
+                         ++c) {
+                        AheadPair& s = wall_ahead_[c];
+                        s.ready = false;
+                        if (!convex) {
+                            continue;
+                        }
+                        try {
+                            wall_query(c, a, body_walls_[c], old_record, s);
+                            s.ready = true;
+                        } catch (...) {
+                            s.ready = false;
+                        }
+                    }
+                }
+            }
+            AheadPair one_wall; // the serial pass's wall_query
             for (std::size_t bi = 0; bi < bodies_.size(); ++bi) {
                 const std::uint32_t a = bodies_[bi];
+                const bool convex = convex_body(a);
                 for (std::uint32_t c = body_wall_offsets_[bi]; c < body_wall_offsets_[bi + 1];
                      ++c) {
                     const std::uint32_t w = body_walls_[c];
+                    if (walls_ahead && wall_ahead_[c].ready) {
+                        take_wall(wall_ahead_[c]);
+                        continue;
+                    }
+                    if (convex) {
+                        wall_query(c, a, w, find_old, one_wall);
+                        take_wall(one_wall);
+                        continue;
+                    }
                     const WallShape& ws = spec_.walls[w].shape;
                     const WallContact bound = std::visit(
                         [&](const auto& s) { return wall_contact(s, p_.x[a], p_.radius[a]); }, ws);
@@ -1332,35 +1434,10 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                                        find_old(g, key.eb));
                             continue;
                         }
-                        const Element& A = elements_[ea];
-                        // A single polyhedron whose deepest vertex was above this plane wall by
-                        // more than the margin: it is still, as long as the body has moved less
-                        // than that height since (travel_; the wall is at rest).
-                        const bool single = element_begin_[a + 1] - a0 == 1;
-                        if (single && travel_[a] < wall_apart_below_[c]) {
-                            continue;
-                        }
-                        // A superquadric's R* (a curvature tensor and an eigen-solve) only
-                        // where it is read: with first_touch, at a contact's first step.
-                        const bool lazy = first_touch && A.kind == Element::Kind::superquadric;
-                        ElementContact ec = element_wall_contact(A, ws, !lazy);
-                        if (!ec.touching) {
-                            if (single && A.kind == Element::Kind::polyhedron) {
-                                wall_apart_below_[c] = travel_[a] + ec.wall_gap - 1e-9 * A.radius;
-                            }
-                            continue;
-                        }
-                        const BodyContact* old = find_old(g, key.eb);
-                        if (lazy && !keeps_radius(old)) {
-                            ec = element_wall_contact(A, ws);
-                        }
-                        if (convex_blocks_) {
-                            queue_convex(a, -1, key, g, ec, old, spec_.walls[w].material,
-                                         ec.overlap / ratio_size(A, nullptr));
-                        } else {
-                            apply(a, -1, key, g, ec, old, spec_.walls[w].material,
-                                  ec.overlap / ratio_size(A, nullptr), wall_totals);
-                        }
+                        // Only clumps have several elements, all spheres; a body of one convex
+                        // element took wall_query above.
+                        throw std::logic_error("body_forces: a convex element in a body of "
+                                               "several elements");
                     }
                 }
             }
