@@ -48,13 +48,48 @@ void ThermalSystem::add_gas_gaps(const dynamics::System& sys, std::vector<double
         }
     }
     long pairs = 0;
-    std::vector<ContactData> element_data; // the exchanges of one pair with a body
-    for (const heat::NearPair& np : heat::near_sphere_pairs(p.x, r, spec_.gas.cutoff)) {
+    const std::vector<heat::NearPair> near = heat::near_sphere_pairs(p.x, r, spec_.gas.cutoff);
+    const auto base_of = [&](const heat::NearPair& np) {
         ContactData d;
         d.a = by_id_[static_cast<std::size_t>(p.id[np.i])];
         d.b = by_id_[static_cast<std::size_t>(p.id[np.j])];
-        if (p.shape[np.i] >= 0 || p.shape[np.j] >= 0) {
-            body_gas_gaps(sys, np.i, np.j, d, element_data);
+        return d;
+    };
+    const auto with_body = [&](const heat::NearPair& np) {
+        return p.shape[np.i] >= 0 || p.shape[np.j] >= 0;
+    };
+    // With several threads the exchanges of the pairs with a body (GJK gaps, patches) are found
+    // first, in parallel: body_gas_gaps reads the state only, so each pair's answer is the one
+    // of the loop below, which takes them in pair order (the same sums, the same bits).
+    std::vector<std::vector<ContactData>> ahead;
+    std::vector<unsigned char> ready;
+    if (threads_ > 1) {
+        ahead.resize(near.size());
+        ready.assign(near.size(), 0);
+        const auto n_near = static_cast<std::ptrdiff_t>(near.size());
+#pragma omp parallel for num_threads(threads_) schedule(dynamic, 8)
+        for (std::ptrdiff_t k = 0; k < n_near; ++k) {
+            const heat::NearPair& np = near[static_cast<std::size_t>(k)];
+            if (!with_body(np)) {
+                continue;
+            }
+            try {
+                body_gas_gaps(sys, np.i, np.j, base_of(np), ahead[static_cast<std::size_t>(k)]);
+                ready[static_cast<std::size_t>(k)] = 1;
+            } catch (...) { // left to the loop below, which runs it again in order
+            }
+        }
+    }
+    std::vector<ContactData> element_data; // the exchanges of one pair with a body
+    for (std::size_t k = 0; k < near.size(); ++k) {
+        const heat::NearPair& np = near[k];
+        ContactData d = base_of(np);
+        if (with_body(np)) {
+            if (!ready.empty() && ready[k] != 0) {
+                element_data.swap(ahead[k]);
+            } else {
+                body_gas_gaps(sys, np.i, np.j, d, element_data);
+            }
             for (ContactData& e : element_data) {
                 g_sum[np.i] += e.conductance;
                 g_sum[np.j] += e.conductance;
@@ -114,19 +149,66 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
         return;
     }
     long pairs = 0;
-    for (const heat::NearPair& np : heat::near_sphere_pairs(p.x, r, spec_.radiation_cutoff)) {
+    const std::vector<heat::NearPair> near =
+        heat::near_sphere_pairs(p.x, r, spec_.radiation_cutoff);
+    const auto base_of = [&](const heat::NearPair& np) {
         ContactData d;
         d.radiative = true;
         d.a = by_id_[static_cast<std::size_t>(p.id[np.i])];
         d.b = by_id_[static_cast<std::size_t>(p.id[np.j])];
-        if (p.shape[np.i] >= 0 || p.shape[np.j] >= 0) {
-            double af = 0.0;
-            double area_i = 0.0;
-            double area_j = 0.0;
-            if (!body_radiation(sys, np.i, np.j, emissivity(d.a), emissivity(d.b), d, af, area_i,
-                                area_j)) {
+        return d;
+    };
+    const auto with_body = [&](const heat::NearPair& np) {
+        return p.shape[np.i] >= 0 || p.shape[np.j] >= 0;
+    };
+    // A pair with a body: its exchange (GJK gap, view, patches), found by body_radiation (which
+    // reads the state only); with several threads first for every pair, in parallel, then taken
+    // in pair order by the loop below (the same sums, the same bits).
+    struct BodyView {
+        ContactData d;
+        double af = 0.0, area_i = 0.0, area_j = 0.0;
+        bool exchanges = false;
+        bool ready = false;
+    };
+    const auto body_view = [&](const heat::NearPair& np, BodyView& v) {
+        v.d = base_of(np);
+        v.exchanges = body_radiation(sys, np.i, np.j, emissivity(v.d.a), emissivity(v.d.b), v.d,
+                                     v.af, v.area_i, v.area_j);
+    };
+    std::vector<BodyView> ahead;
+    if (threads_ > 1) {
+        ahead.resize(near.size());
+        const auto n_near = static_cast<std::ptrdiff_t>(near.size());
+#pragma omp parallel for num_threads(threads_) schedule(dynamic, 8)
+        for (std::ptrdiff_t k = 0; k < n_near; ++k) {
+            const heat::NearPair& np = near[static_cast<std::size_t>(k)];
+            BodyView& v = ahead[static_cast<std::size_t>(k)];
+            if (!with_body(np)) {
                 continue;
             }
+            try {
+                body_view(np, v);
+                v.ready = true;
+            } catch (...) { // left to the loop below, which runs it again in order
+            }
+        }
+    }
+    BodyView one; // the serial route's
+    for (std::size_t k = 0; k < near.size(); ++k) {
+        const heat::NearPair& np = near[k];
+        ContactData d = base_of(np);
+        if (with_body(np)) {
+            BodyView& v = !ahead.empty() && ahead[k].ready ? ahead[k] : one;
+            if (&v == &one) {
+                body_view(np, v);
+            }
+            if (!v.exchanges) {
+                continue;
+            }
+            d = std::move(v.d);
+            const double af = v.af;
+            const double area_i = v.area_i;
+            const double area_j = v.area_j;
             take_ambient_view(d.a, d.patches_a, af / area_i);
             take_ambient_view(d.b, d.patches_b, af / area_j);
             const double g =

@@ -15,9 +15,11 @@
 #include <cmath>
 #include <cstdio>
 #include <gtest/gtest.h>
+#include <memory>
 #include <numbers>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace kiln::thermal {
@@ -358,6 +360,40 @@ TEST(BodyGaps, ClosedBoxOfMixedBodiesWithGasConservesHeat) {
     EXPECT_GE(run.lowest, 300.0 - 1e-6);
     EXPECT_LE(run.highest, 600.0 + 1e-6);
     EXPECT_GT(heat.thermal_energy() / heat.heat_capacity(), 300.0);
+}
+
+TEST(BodyGaps, OneAndTwoThreadsGiveTheSameTemperatures) {
+    // With two threads the gaps of body pairs (gas and radiation) are found in parallel and
+    // taken in pair order: the mixed box with gas and neighbour radiation ends with the same
+    // temperature in every particle and the same heat bookkeeping as with one thread.
+    const auto run = [](int threads) {
+        dynamics::SceneSpec s = mixed_box(6.5e-3);
+        s.threads = threads;
+        auto sys = std::make_unique<dynamics::System>(s);
+        HeatSpec h = mixed_heat(s);
+        h.gas.conductivity = k_gas;
+        h.materials[0].emissivity = 0.9;
+        h.materials[1].emissivity = 0.7;
+        auto heat = std::make_unique<ThermalSystem>(h, *sys);
+        for (int k = 0; k < 3000; ++k) {
+            sys->step();
+            heat->after_step(*sys);
+        }
+        return std::make_pair(std::move(sys), std::move(heat));
+    };
+    const auto [sys1, heat1] = run(1);
+    const auto [sys2, heat2] = run(2);
+    ASSERT_EQ(sys2->threads(), 2);
+    EXPECT_GT(summary_count(*heat1, "gas_gap_pairs"), 100); // or the test proves nothing
+    EXPECT_GT(summary_count(*heat1, "radiation_pairs"), 100);
+    EXPECT_EQ(summary_count(*heat1, "gas_gap_pairs"), summary_count(*heat2, "gas_gap_pairs"));
+    EXPECT_EQ(summary_count(*heat1, "radiation_pairs"), summary_count(*heat2, "radiation_pairs"));
+    // Tolerance: none. The same exchanges, summed in the same order.
+    for (std::size_t i = 0; i < sys1->particles().size(); ++i) {
+        EXPECT_EQ(heat1->mean_temperature(*sys1, i), heat2->mean_temperature(*sys2, i)) << i;
+    }
+    EXPECT_EQ(heat1->thermal_energy(), heat2->thermal_energy());
+    EXPECT_EQ(heat1->external_heat(), heat2->external_heat());
 }
 
 TEST(BodyGaps, GasOffOrOutOfReachChangesNoBit) {
