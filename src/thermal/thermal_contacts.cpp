@@ -94,12 +94,13 @@ void ThermalSystem::add_contacts(const dynamics::System& sys, std::vector<double
     const ParticleStore& p = sys.particles();
     const auto& mats = sys.spec().materials;
     sys.collect_contacts(contacts_);
-    for (const dynamics::ContactRecord& rec : contacts_) {
-        ContactData d;
+    // The exchange of one contact (conductance, patches), from the state only; false when the
+    // contact exchanges nothing (a side without heat, a wall without a temperature).
+    const auto exchange = [&](const dynamics::ContactRecord& rec, ContactData& d) {
         d.wall = rec.wall;
         d.a = by_id_[static_cast<std::size_t>(p.id[rec.i])];
         if (d.a.slot < 0) {
-            continue;
+            return false;
         }
         const double ri = p.radius[rec.i];
         const Material& mi = mats[static_cast<std::size_t>(d.a.material)];
@@ -113,14 +114,14 @@ void ThermalSystem::add_contacts(const dynamics::System& sys, std::vector<double
             d.wall_temperature =
                 mesh ? spec_.mesh_wall_temperature[rec.j - n_walls] : spec_.wall_temperature[rec.j];
             if (std::isnan(d.wall_temperature)) {
-                continue;
+                return false;
             }
             mat_j = mesh ? sys.spec().mesh_walls[rec.j - n_walls].material
                          : sys.spec().walls[rec.j].material;
         } else {
             d.b = by_id_[static_cast<std::size_t>(p.id[rec.j])];
             if (d.b.slot < 0) {
-                continue;
+                return false;
             }
             mat_j = d.b.material;
             rj = p.radius[rec.j];
@@ -167,6 +168,39 @@ void ThermalSystem::add_contacts(const dynamics::System& sys, std::vector<double
         }
         if (!rec.wall && d.b.templ >= 0) {
             d.patches_b = patches(d.b, rec.j, -rec.normal);
+        }
+        return true;
+    };
+    // With several threads every contact's exchange is found first, in parallel (each from the
+    // state only), and the loop below takes them in contact order: the same sums, the same bits.
+    // A contact whose exchange threw is left to that loop, which runs it again in order.
+    const std::size_t n = contacts_.size();
+    std::vector<ContactData> ahead;
+    std::vector<unsigned char> state; // 0: not found ahead, 1: no exchange, 2: an exchange
+    if (threads_ > 1) {
+        ahead.resize(n);
+        state.assign(n, 0);
+        const auto count = static_cast<std::ptrdiff_t>(n);
+#pragma omp parallel for num_threads(threads_) schedule(dynamic, 16)
+        for (std::ptrdiff_t k = 0; k < count; ++k) {
+            const auto c = static_cast<std::size_t>(k);
+            try {
+                state[c] = exchange(contacts_[c], ahead[c]) ? 2 : 1;
+            } catch (...) {
+                state[c] = 0;
+            }
+        }
+    }
+    for (std::size_t c = 0; c < n; ++c) {
+        const dynamics::ContactRecord& rec = contacts_[c];
+        ContactData d;
+        if (!state.empty() && state[c] != 0) {
+            if (state[c] == 1) {
+                continue;
+            }
+            d = std::move(ahead[c]);
+        } else if (!exchange(rec, d)) {
+            continue;
         }
         // The capacity that answers a lagged contact rate within one step: the whole lumped
         // particle, or the cells under the contact of a resolved one (a conservative choice: the
