@@ -482,6 +482,10 @@ class System {
         const BodyContact* old = nullptr; // last step's record of the contact, or none
         double ratio = 0.0;               // overlap / ratio_size
         NarrowCounts counts;
+        // An entry with a clump (the general route): the narrow-phase answers of its convex
+        // element pairs, in the route's order (planned: found ahead).
+        bool planned = false;
+        std::vector<ElementContact> plan;
     };
     std::vector<AheadPair> ahead_;
     std::vector<AheadPair> wall_ahead_; // the same for body_walls_ (a is the body, b the wall)

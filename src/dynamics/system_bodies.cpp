@@ -939,11 +939,18 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 }
             };
             AheadPair one; // the serial pass's single_query
-            std::vector<std::uint32_t> near_b;
-            const auto general_entry = [&](std::uint32_t k, std::uint32_t a, std::uint32_t b) {
+            // The general route of entry k. `lookup(g, eb)`: last step's record (find_old in the
+            // serial pass). `plan`: nullptr in the serial route, which runs the narrow phase of
+            // each convex element pair (a clump's member against a convex body) itself. Ahead of
+            // the serial pass (`planning`) only those narrow phases run, in the loop's order,
+            // and their answers are appended to *plan; the serial pass then takes them from
+            // *plan (`planning` false) in the same order, with everything else as without.
+            const auto general_entry = [&](std::uint32_t k, std::uint32_t a, std::uint32_t b,
+                                           const auto& lookup, std::vector<ElementContact>* plan,
+                                           bool planning) {
                 if (single_convex(a, b)) {
                     one.counts = {};
-                    single_query(k, a, b, find_old, one);
+                    single_query(k, a, b, lookup, one);
                     take_single(k, one);
                     return;
                 }
@@ -955,8 +962,11 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 const std::uint32_t b0 = element_begin_[b];
                 sep_proofs_[k].valid = false; // the full route may change the direction
                 apart_below_[k] = -std::numeric_limits<double>::infinity();
+                std::size_t next = 0; // the next answer of *plan the serial pass takes
                 // Elements of b that reach into a's bounding sphere (a clump pair touches with a
-                // few of its members: 12 x 12 candidate pairs become about 2 x 2).
+                // few of its members: 12 x 12 candidate pairs become about 2 x 2); per thread,
+                // as the planning runs on several.
+                thread_local std::vector<std::uint32_t> near_b;
                 near_b.clear();
                 for (std::uint32_t eb = b0; eb < element_begin_[b + 1]; ++eb) {
                     const Element B = element(eb);
@@ -984,9 +994,12 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         const BodyContactKey key{p_.id[a], p_.id[b],
                                                  static_cast<std::int32_t>(ea - a0),
                                                  static_cast<std::int32_t>(eb - b0)};
-                        const BodyContact* old = find_old(g, key.eb);
+                        const BodyContact* old = lookup(g, key.eb);
                         const bool convex = is_convex(A) || is_convex(B);
                         if (!convex) {
+                            if (planning) {
+                                continue;
+                            }
                             if (A.centre != B.centre) { // coincident centres: no normal
                                 // R*: with first_touch, that of the contact's first step (the
                                 // same for spheres)
@@ -997,27 +1010,36 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                             }
                             continue;
                         }
-                        // Warm start: the last normal, else the line of centres. Only pairs
-                        // with a superquadric read it (a square root and a division saved for
-                        // every polyhedron query).
-                        const bool wants_warm = A.kind == Element::Kind::superquadric ||
-                                                B.kind == Element::Kind::superquadric;
-                        Vec3 warm = Vec3::UnitZ();
-                        if (wants_warm) {
-                            const Vec3 guess =
-                                old != nullptr ? old->normal : Vec3(A.centre - B.centre);
-                            if (guess.squaredNorm() > 0.0) {
-                                warm = guess.normalized();
+                        ElementContact ec;
+                        if (plan != nullptr && !planning) {
+                            ec = (*plan)[next++]; // found ahead, in this order
+                        } else {
+                            // Warm start: the last normal, else the line of centres. Only pairs
+                            // with a superquadric read it (a square root and a division saved
+                            // for every polyhedron query).
+                            const bool wants_warm = A.kind == Element::Kind::superquadric ||
+                                                    B.kind == Element::Kind::superquadric;
+                            Vec3 warm = Vec3::UnitZ();
+                            if (wants_warm) {
+                                const Vec3 guess =
+                                    old != nullptr ? old->normal : Vec3(A.centre - B.centre);
+                                if (guess.squaredNorm() > 0.0) {
+                                    warm = guess.normalized();
+                                }
+                            }
+                            // A clump's member against a convex body: no cached direction nor
+                            // plane memory (those are per entry, for single elements).
+                            // R* only where it is read: apply and queue_convex keep the first
+                            // step's with first_touch.
+                            const bool radius = !keeps_radius(old);
+                            ec = element_contact(A, B, spec_.narrow_phase,
+                                                 wants_warm ? &warm : nullptr, nullptr,
+                                                 old != nullptr, nullptr, radius);
+                            if (planning) {
+                                plan->push_back(ec);
+                                continue;
                             }
                         }
-                        // A clump's member against a convex body: no cached direction nor
-                        // plane memory (those are per entry, for single elements).
-                        // R* only where it is read: apply and queue_convex keep the first
-                        // step's with first_touch.
-                        const bool radius = !keeps_radius(old);
-                        const ElementContact ec =
-                            element_contact(A, B, spec_.narrow_phase, wants_warm ? &warm : nullptr,
-                                            nullptr, old != nullptr, nullptr, radius);
                         ++np_.calls;
                         separation_skips_ += ec.proved_apart ? 1 : 0;
                         np_.fallbacks += ec.fell_back ? 1 : 0;
@@ -1160,12 +1182,13 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     ++separation_skips_;
                 }
             }
-            // With several threads, the queries of the single_convex entries run first, in
-            // parallel, and the serial pass below takes their counts and contacts in its order.
-            // Each query reads the poses and last step's records (found by a search of the
-            // sorted table instead of the serial pass's cursor) and writes only its own entry's
-            // state, so the answers do not depend on the threads or their order. A query that
-            // throws is left to the serial pass, which runs it again in order.
+            // With several threads, the queries of the single_convex entries and the narrow
+            // phases of the other general entries (a clump against a convex body) run first, in
+            // parallel, and the serial pass below takes their answers in its order. Each reads
+            // the poses and last step's records (found by a search of the sorted table instead
+            // of the serial pass's cursor) and writes only its own entry's state, so the answers
+            // do not depend on the threads or their order. A query that throws is left to the
+            // serial pass, which runs it again in order.
             const auto old_record = [&](const ContactGroup& g,
                                         std::int32_t eb) -> const BodyContact* {
                 auto r = std::lower_bound(body_groups_.begin(), body_groups_.end(), g);
@@ -1185,16 +1208,24 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 for (std::ptrdiff_t h = 0; h < hits; ++h) {
                     AheadPair& s = ahead_[static_cast<std::size_t>(h)];
                     s.ready = false;
+                    s.planned = false;
                     const MemberPair& m = member_pairs_[member_hits_[static_cast<std::size_t>(h)]];
-                    if (m.ea != no_element || !single_convex(m.a, m.b)) {
+                    if (m.ea != no_element) {
                         continue;
                     }
                     try {
-                        s.counts = {};
-                        single_query(m.k, m.a, m.b, old_record, s);
-                        s.ready = true;
+                        if (single_convex(m.a, m.b)) {
+                            s.counts = {};
+                            single_query(m.k, m.a, m.b, old_record, s);
+                            s.ready = true;
+                        } else {
+                            s.plan.clear();
+                            general_entry(m.k, m.a, m.b, old_record, &s.plan, true);
+                            s.planned = true;
+                        }
                     } catch (...) {
                         s.ready = false;
+                        s.planned = false;
                     }
                 }
             }
@@ -1246,8 +1277,10 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 if (m.ea == no_element) {
                     if (ahead && ahead_[h].ready) {
                         take_single(m.k, ahead_[h]);
+                    } else if (ahead && ahead_[h].planned) {
+                        general_entry(m.k, m.a, m.b, find_old, &ahead_[h].plan, false);
                     } else {
-                        general_entry(m.k, m.a, m.b);
+                        general_entry(m.k, m.a, m.b, find_old, nullptr, false);
                     }
                     continue;
                 }

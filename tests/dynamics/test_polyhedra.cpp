@@ -545,9 +545,20 @@ TEST(Polyhedra, OneAndTwoThreadsGiveTheSameBits) {
     // superquadrics, and either against a sphere) runs ahead of the serial pass, in parallel;
     // each query keeps its entry's cached direction, proof and plane memory. The convex pour gives
     // the same contacts at every step, the same counts and the same bits as with one thread.
+    // Clumps (12-sphere cylinders) on top, falling fastest, so that their members meet the
+    // polyhedra and superquadrics (the general route, planned ahead with two threads).
     SceneSpec one_spec = convex_pour();
+    one_spec.shapes.push_back(shape("cylinder_12"));
+    InsertSpec clumps;
+    clumps.region = {Vec3(-0.008, -0.008, 0.051), Vec3(0.008, 0.008, 0.085)};
+    clumps.count = 5;
+    clumps.shape = static_cast<int>(one_spec.shapes.size()) - 1;
+    clumps.size.radius = one_spec.shapes.back().bounding_radius();
+    clumps.orientation.random = true;
+    clumps.velocity = Vec3(0, 0, -1.5);
+    one_spec.inserts.push_back(clumps);
     one_spec.threads = 1;
-    SceneSpec two_spec = convex_pour();
+    SceneSpec two_spec = one_spec;
     two_spec.threads = 2;
     System one(one_spec);
     System two(two_spec);
