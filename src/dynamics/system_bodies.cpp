@@ -337,6 +337,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
     // push_back per member was most of a clump scene's posing).
     element_begin_.resize(p_.size() + 1);
     std::size_t n_elements = 0;
+    std::size_t n_convex = 0; // particles of one convex element (polyhedron, superquadric)
     const auto room = [&](std::size_t n) {
         if (member_c_.size() < n_elements + n) {
             member_c_.resize(n_elements + n);
@@ -378,6 +379,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 elements_.resize(e0 + 1);
             }
             elements_[e0] = E;
+            ++n_convex;
         }
     }
     element_begin_[p_.size()] = static_cast<std::uint32_t>(n_elements);
@@ -1200,7 +1202,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 }
                 return nullptr;
             };
-            const bool ahead = threads_ > 1 && n_hits > 1;
+            // (Only when there are convex bodies: a scene of clumps and spheres has no narrow
+            // phase to run ahead, and the parallel region would cost more than it saves.)
+            const bool ahead = threads_ > 1 && n_convex > 0 && n_hits > 1;
             if (ahead) {
                 ahead_.resize(n_hits);
                 const auto hits = static_cast<std::ptrdiff_t>(n_hits);
@@ -1373,7 +1377,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             };
             // With several threads, the wall queries of convex bodies run ahead, in parallel.
             const std::size_t n_candidates = body_walls_.size();
-            const bool walls_ahead = threads_ > 1 && n_candidates > 1;
+            const bool walls_ahead = threads_ > 1 && n_convex > 0 && n_candidates > 1;
             if (walls_ahead) {
                 wall_ahead_.resize(n_candidates);
                 const auto n_bodies = static_cast<std::ptrdiff_t>(bodies_.size());
