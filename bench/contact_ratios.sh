@@ -17,20 +17,10 @@
 # name or sq08/sq03 works). Needs a Release build with benchmarks (scripts/setup.sh), or
 # KILN_SCENE_STEPS pointing at a kiln_scene_steps binary. Figures: docs/performance.md.
 set -euo pipefail
-here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-bin=${KILN_SCENE_STEPS:-"$here/build/bench/kiln_scene_steps"}
-[[ -x $bin ]] || {
-    echo "bench/contact_ratios.sh: no kiln_scene_steps at $bin (build with -DKILN_BUILD_BENCH=ON)" >&2
-    exit 1
-}
-rounds=${1:-3}
-[[ $rounds =~ ^[1-9][0-9]*$ ]] || {
-    echo "bench/contact_ratios.sh: ROUNDS must be a positive integer, got '$rounds'" >&2
-    exit 2
-}
-shift || true
-kinds=("$@")
-((${#kinds[@]} > 0)) || kinds=(sphere cylinder_12 cylinder_36 cube icosahedron cylinder_16)
+script=bench/contact_ratios.sh
+default_rounds=3
+default_kinds=(sphere cylinder_12 cylinder_36 cube icosahedron cylinder_16)
+source "$(dirname "${BASH_SOURCE[0]}")/scene_args.sh"
 [[ " ${kinds[*]} " == *" sphere "* ]] || kinds=(sphere "${kinds[@]}")
 
 out=$(mktemp)

@@ -12,20 +12,10 @@
 # superball). The table gives the fastest run of each over the rounds. Needs a Release build with
 # benchmarks (scripts/setup.sh), or KILN_SCENE_STEPS pointing at a kiln_scene_steps binary.
 set -euo pipefail
-here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-bin=${KILN_SCENE_STEPS:-"$here/build/bench/kiln_scene_steps"}
-[[ -x $bin ]] || {
-    echo "bench/thread_speedup.sh: no kiln_scene_steps at $bin (build with -DKILN_BUILD_BENCH=ON)" >&2
-    exit 1
-}
-rounds=${1:-1}
-[[ $rounds =~ ^[1-9][0-9]*$ ]] || {
-    echo "bench/thread_speedup.sh: ROUNDS must be a positive integer, got '$rounds'" >&2
-    exit 2
-}
-shift || true
-kinds=("$@")
-((${#kinds[@]} > 0)) || kinds=(sphere cylinder_12 cube icosahedron cylinder_16 sq08 superball)
+script=bench/thread_speedup.sh
+default_rounds=1
+default_kinds=(sphere cylinder_12 cube icosahedron cylinder_16 sq08 superball)
+source "$(dirname "${BASH_SOURCE[0]}")/scene_args.sh"
 
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT

@@ -781,6 +781,22 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 return element_begin_[a + 1] - a0 == 1 && element_begin_[b + 1] - b0 == 1 &&
                        (!(member_c_[a0].r > 0.0) || !(member_c_[b0].r > 0.0));
             };
+            // The general route's bounding-sphere tests of the element pair (A of particle a, B
+            // of particle b), in its order: B within a's bounding sphere, A within b's, the
+            // elements' spheres. True: apart.
+            const auto spheres_apart = [&](const Element& A, const Element& B, std::uint32_t a,
+                                           std::uint32_t b) {
+                const double rb = B.radius + p_.radius[a];
+                if (!((B.centre - p_.x[a]).squaredNorm() < rb * rb)) {
+                    return true;
+                }
+                const double rab = A.radius + p_.radius[b];
+                if ((A.centre - p_.x[b]).squaredNorm() >= rab * rab) {
+                    return true;
+                }
+                const double re = A.radius + B.radius;
+                return (A.centre - B.centre).squaredNorm() >= re * re;
+            };
             // The query of entry k (single_convex): the general route's bounding-sphere tests,
             // the cached direction's proof, the narrow phase. The counts go to out.counts, a
             // contact for the law to `out` (touching). `lookup(g, eb)`: last step's record
@@ -807,17 +823,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     if (!(member_c_[a0].r > 0.0) && !(member_c_[b0].r > 0.0) &&
                         A.kind == Element::Kind::polyhedron &&
                         B.kind == Element::Kind::polyhedron) {
-                        const double rb = B.radius + p_.radius[a];
-                        if (!((B.centre - p_.x[a]).squaredNorm() < rb * rb)) {
-                            return;
-                        }
-                        const double rab = A.radius + p_.radius[b];
-                        if ((A.centre - p_.x[b]).squaredNorm() >= rab * rab) {
-                            return;
-                        }
-                        const double re = A.radius + B.radius;
-                        if ((A.centre - B.centre).squaredNorm() >= re * re) {
-                            return; // bounding spheres apart: no contact, no history
+                        if (spheres_apart(A, B, a, b)) {
+                            return; // no contact, no history
                         }
                         if (lookup(ContactGroup(0, k, 0, 0), 0) == nullptr) {
                             // The proof of an earlier step, moved to this pose: a vertex's height
@@ -861,21 +868,10 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 }
                 sep_proofs_[k].valid = false; // the full route may change the direction
                 apart_below_[k] = -std::numeric_limits<double>::infinity();
-                // The general route's tests for its one element pair: b's element within a's
-                // bounding sphere, a's within b's, the elements' bounding spheres.
-                const Element B = element(b0);
-                const double rb = B.radius + p_.radius[a];
-                if (!((B.centre - p_.x[a]).squaredNorm() < rb * rb)) {
-                    return;
-                }
                 const Element A = element(a0);
-                const double rab = A.radius + p_.radius[b];
-                if ((A.centre - p_.x[b]).squaredNorm() >= rab * rab) {
-                    return;
-                }
-                const double re = A.radius + B.radius;
-                if ((A.centre - B.centre).squaredNorm() >= re * re) {
-                    return; // bounding spheres apart: no contact, no history
+                const Element B = element(b0);
+                if (spheres_apart(A, B, a, b)) {
+                    return; // no contact, no history
                 }
                 const BodyContactKey key{p_.id[a], p_.id[b], 0, 0};
                 const BodyContact* old = lookup(ContactGroup(0, k, 0, 0), key.eb);
