@@ -27,24 +27,39 @@ struct SimplexPoint {
 };
 
 /// A GJK simplex in fixed storage (at most four points; a heap vector per iteration was a tenth
-/// of the query).
+/// of the query), with the squared distance and weights of its nearest point as the last
+/// closest_on_simplex found them (infinity: none yet).
 struct Simplex {
     std::array<SimplexPoint, 4> p{};
     int n = 0;
+    double d2 = std::numeric_limits<double>::infinity();
+    std::array<double, 4> weights{};
     [[nodiscard]] const SimplexPoint& operator[](std::size_t k) const { return p[k]; }
 };
 
 /// Closest point to the origin of the simplex `s` (1-4 points): tries every sub-simplex, takes
 /// the affine minimiser of each whose barycentric weights are all >= 0, keeps the nearest
 /// (the true closest point lies in the relative interior of one face, where it is that face's
-/// affine minimiser). Reduces `s` to the supporting face; `lambda` gets its weights.
-/// Returns false when no sub-simplex qualifies (numerically degenerate).
+/// affine minimiser; the first in mask order of equal ones). Reduces `s` to the supporting face;
+/// `lambda` gets its weights. Returns false when no sub-simplex qualifies (numerically
+/// degenerate).
+///
+/// Only the sub-simplices with the newest point (the last) are evaluated: the others are faces of
+/// the simplex of the last call, which that call reduced to its winner, and they come first in
+/// mask order, in the same order and with the same arithmetic as then. So the best of them is
+/// that winner (the whole old simplex, mask 2^(n-1) - 1) with its stored distance and weights,
+/// exactly as an evaluation of all of them would find.
 bool closest_on_simplex(Simplex& s, std::array<double, 4>& lambda) {
     const int n = s.n;
     double best = std::numeric_limits<double>::infinity();
     int best_mask = 0;
     std::array<double, 4> best_l{};
-    for (int mask = 1; mask < (1 << n); ++mask) {
+    if (n > 1 && s.d2 < std::numeric_limits<double>::infinity()) {
+        best = s.d2;
+        best_mask = (1 << (n - 1)) - 1;
+        best_l = s.weights;
+    }
+    for (int mask = (n > 1 && best_mask != 0) ? 1 << (n - 1) : 1; mask < (1 << n); ++mask) {
         std::array<int, 4> idx{};
         int k = 0;
         for (int v = 0; v < n; ++v) {
@@ -110,6 +125,8 @@ bool closest_on_simplex(Simplex& s, std::array<double, 4>& lambda) {
         }
     }
     s.n = k;
+    s.d2 = best;
+    s.weights = lambda;
     return true;
 }
 
