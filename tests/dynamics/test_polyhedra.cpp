@@ -564,7 +564,7 @@ TEST(Polyhedra, OneAndTwoThreadsGiveTheSameBits) {
     System two(two_spec);
     ASSERT_EQ(two.threads(), 2);
     long contacts = 0;
-    ASSERT_NO_FATAL_FAILURE(step_both(two, one, 30000, contacts));
+    ASSERT_NO_FATAL_FAILURE(step_both(two, one, 18000, contacts));
     EXPECT_GT(contacts, 20000);
     expect_same_bits(one.particles(), two.particles());
     EXPECT_EQ(one.counters().wall_contacts, two.counters().wall_contacts);
