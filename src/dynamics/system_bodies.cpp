@@ -1313,13 +1313,17 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // narrow phase; a contact for the law goes to `out` (touching). It writes only the
             // candidate's own state (wall_apart_below_), so it may run ahead of the serial pass
             // on another thread, as single_query does.
+            // Does body a's bounding sphere reach into wall shape ws?
+            const auto within_reach = [&](std::uint32_t a, const WallShape& ws) {
+                const WallContact bound = std::visit(
+                    [&](const auto& s) { return wall_contact(s, p_.x[a], p_.radius[a]); }, ws);
+                return bound.overlap > 0.0;
+            };
             const auto wall_query = [&](std::uint32_t c, std::uint32_t a, std::uint32_t w,
                                         const auto& lookup, AheadPair& out) {
                 out.touching = false;
                 const WallShape& ws = spec_.walls[w].shape;
-                const WallContact bound = std::visit(
-                    [&](const auto& s) { return wall_contact(s, p_.x[a], p_.radius[a]); }, ws);
-                if (!(bound.overlap > 0.0)) {
+                if (!within_reach(a, ws)) {
                     return;
                 }
                 const std::uint32_t ea = element_begin_[a];
@@ -1415,9 +1419,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         continue;
                     }
                     const WallShape& ws = spec_.walls[w].shape;
-                    const WallContact bound = std::visit(
-                        [&](const auto& s) { return wall_contact(s, p_.x[a], p_.radius[a]); }, ws);
-                    if (!(bound.overlap > 0.0)) {
+                    if (!within_reach(a, ws)) {
                         continue;
                     }
                     const std::uint32_t a0 = element_begin_[a];
