@@ -61,9 +61,10 @@ void ThermalSystem::add_gas_gaps(const dynamics::System& sys, std::vector<double
     // With several threads the exchanges of the pairs with a body (GJK gaps, patches) are found
     // first, in parallel: body_gas_gaps reads the state only, so each pair's answer is the one
     // of the loop below, which takes them in pair order (the same sums, the same bits).
+    // (Only when a pair has a body: sphere pairs have nothing to find ahead.)
     std::vector<std::vector<ContactData>> ahead;
     std::vector<unsigned char> ready;
-    if (threads_ > 1) {
+    if (threads_ > 1 && std::any_of(near.begin(), near.end(), with_body)) {
         ahead.resize(near.size());
         ready.assign(near.size(), 0);
         const auto n_near = static_cast<std::ptrdiff_t>(near.size());
@@ -176,7 +177,7 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
                                      v.af, v.area_i, v.area_j);
     };
     std::vector<BodyView> ahead;
-    if (threads_ > 1) {
+    if (threads_ > 1 && std::any_of(near.begin(), near.end(), with_body)) {
         ahead.resize(near.size());
         const auto n_near = static_cast<std::ptrdiff_t>(near.size());
 #pragma omp parallel for num_threads(threads_) schedule(dynamic, 8)
