@@ -482,6 +482,17 @@ class System {
         const BodyContact* old = nullptr; // last step's record of the contact, or none
         double ratio = 0.0;               // overlap / ratio_size
         NarrowCounts counts;
+        /// Records a contact for the law.
+        void found(std::uint32_t a_in, std::uint32_t b_in, const BodyContactKey& key_in,
+                   const ElementContact& ec_in, const BodyContact* old_in, double ratio_in) {
+            touching = true;
+            a = a_in;
+            b = b_in;
+            key = key_in;
+            ec = ec_in;
+            old = old_in;
+            ratio = ratio_in;
+        }
         // An entry with a clump (the general route): the narrow-phase answers of its convex
         // element pairs, in the route's order (planned: found ahead).
         bool planned = false;

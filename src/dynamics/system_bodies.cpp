@@ -797,14 +797,32 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 const double re = A.radius + B.radius;
                 return (A.centre - B.centre).squaredNorm() >= re * re;
             };
+            // Warm start of the narrow phase of elements A and B (`old`: their contact's record
+            // of the last step, or none): the last normal, else the line of centres, in `warm`.
+            // Only pairs with a superquadric read it (a square root and a division saved for
+            // every polyhedron query): false, and `warm` is not set, for the others.
+            const auto warm_start = [](const Element& A, const Element& B, const BodyContact* old,
+                                       Vec3& warm) {
+                if (A.kind != Element::Kind::superquadric &&
+                    B.kind != Element::Kind::superquadric) {
+                    return false;
+                }
+                warm = Vec3::UnitZ();
+                const Vec3 guess = old != nullptr ? old->normal : Vec3(A.centre - B.centre);
+                if (guess.squaredNorm() > 0.0) {
+                    warm = guess.normalized();
+                }
+                return true;
+            };
             // The query of entry k (single_convex): the general route's bounding-sphere tests,
             // the cached direction's proof, the narrow phase. The counts go to out.counts, a
             // contact for the law to `out` (touching). `lookup(g, eb)`: last step's record
             // (find_old in the serial pass, old_record ahead of it).
             const auto single_query = [&](std::uint32_t k, std::uint32_t a, std::uint32_t b,
                                           const auto& lookup, AheadPair& out) {
-                NarrowCounts& n = out.counts;
+                out.counts = {};
                 out.touching = false;
+                NarrowCounts& n = out.counts;
                 const double rsum = p_.radius[a] + p_.radius[b];
                 if ((p_.x[a] - p_.x[b]).squaredNorm() >= rsum * rsum) {
                     return;
@@ -875,18 +893,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 }
                 const BodyContactKey key{p_.id[a], p_.id[b], 0, 0};
                 const BodyContact* old = lookup(ContactGroup(0, k, 0, 0), key.eb);
-                // Warm start: the last normal, else the line of centres. Only pairs with a
-                // superquadric read it (a square root and a division saved for every
-                // polyhedron query).
-                const bool wants_warm =
-                    A.kind == Element::Kind::superquadric || B.kind == Element::Kind::superquadric;
-                Vec3 warm = Vec3::UnitZ();
-                if (wants_warm) {
-                    const Vec3 guess = old != nullptr ? old->normal : Vec3(A.centre - B.centre);
-                    if (guess.squaredNorm() > 0.0) {
-                        warm = guess.normalized();
-                    }
-                }
+                Vec3 warm;
+                const bool wants_warm = warm_start(A, B, old, warm);
                 Vec3* sep = nullptr;
                 if (separation_cache_) {
                     sep = &sep_dirs_[k];
@@ -911,13 +919,17 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 n.fallbacks += ec.fell_back ? 1 : 0;
                 n.failures += ec.converged ? 0 : 1;
                 if (ec.touching) {
-                    out.touching = true;
-                    out.a = a;
-                    out.b = b;
-                    out.key = key;
-                    out.ec = ec;
-                    out.old = old;
-                    out.ratio = ec.overlap / ratio_size(A, &B);
+                    out.found(a, b, key, ec, old, ec.overlap / ratio_size(A, &B));
+                }
+            };
+            // A contact found by single_query or wall_query to the law, in the serial order
+            // (b: the other particle, or -1 for a wall; `t`: the totals apply counts it in).
+            const auto hand_over = [&](const AheadPair& s, long b, const ContactGroup& g,
+                                       int material, ChunkTotals& t) {
+                if (convex_blocks_) {
+                    queue_convex(s.a, b, s.key, g, s.ec, s.old, material, s.ratio);
+                } else {
+                    apply(s.a, b, s.key, g, s.ec, s.old, material, s.ratio, t);
                 }
             };
             // The counts and the contact of a single_query, taken in the serial order.
@@ -929,12 +941,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 if (!s.touching) {
                     return;
                 }
-                const ContactGroup g(0, k, 0, 0);
-                if (convex_blocks_) {
-                    queue_convex(s.a, s.b, s.key, g, s.ec, s.old, p_.material[s.b], s.ratio);
-                } else {
-                    apply(s.a, s.b, s.key, g, s.ec, s.old, p_.material[s.b], s.ratio, pair_totals);
-                }
+                hand_over(s, s.b, ContactGroup(0, k, 0, 0), p_.material[s.b], pair_totals);
             };
             AheadPair one; // the serial pass's single_query
             // The general route of entry k. `lookup(g, eb)`: last step's record (find_old in the
@@ -947,7 +954,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                                            const auto& lookup, std::vector<ElementContact>* plan,
                                            bool planning) {
                 if (single_convex(a, b)) {
-                    one.counts = {};
                     single_query(k, a, b, lookup, one);
                     take_single(k, one);
                     return;
@@ -1012,19 +1018,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         if (plan != nullptr && !planning) {
                             ec = (*plan)[next++]; // found ahead, in this order
                         } else {
-                            // Warm start: the last normal, else the line of centres. Only pairs
-                            // with a superquadric read it (a square root and a division saved
-                            // for every polyhedron query).
-                            const bool wants_warm = A.kind == Element::Kind::superquadric ||
-                                                    B.kind == Element::Kind::superquadric;
-                            Vec3 warm = Vec3::UnitZ();
-                            if (wants_warm) {
-                                const Vec3 guess =
-                                    old != nullptr ? old->normal : Vec3(A.centre - B.centre);
-                                if (guess.squaredNorm() > 0.0) {
-                                    warm = guess.normalized();
-                                }
-                            }
+                            Vec3 warm;
+                            const bool wants_warm = warm_start(A, B, old, warm);
                             // A clump's member against a convex body: no cached direction nor
                             // plane memory (those are per entry, for single elements).
                             // R* only where it is read: apply and queue_convex keep the first
@@ -1215,7 +1210,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     }
                     try {
                         if (single_convex(m.a, m.b)) {
-                            s.counts = {};
                             single_query(m.k, m.a, m.b, old_record, s);
                             s.ready = true;
                         } else {
@@ -1308,17 +1302,17 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // Walls, body by body and wall by wall: only those within the skin at the last list
             // build can be reached (as for spheres, find_wall_candidates).
             //
-            // The query of candidate c (body a, wall w) of a body whose one element is convex
-            // (polyhedron, superquadric): the bounding-sphere test, the near-miss bound, the
-            // narrow phase; a contact for the law goes to `out` (touching). It writes only the
-            // candidate's own state (wall_apart_below_), so it may run ahead of the serial pass
-            // on another thread, as single_query does.
             // Does body a's bounding sphere reach into wall shape ws?
             const auto within_reach = [&](std::uint32_t a, const WallShape& ws) {
                 const WallContact bound = std::visit(
                     [&](const auto& s) { return wall_contact(s, p_.x[a], p_.radius[a]); }, ws);
                 return bound.overlap > 0.0;
             };
+            // The query of candidate c (body a, wall w) of a body whose one element is convex
+            // (polyhedron, superquadric): the bounding-sphere test, the near-miss bound, the
+            // narrow phase; a contact for the law goes to `out` (touching). It writes only the
+            // candidate's own state (wall_apart_below_), so it may run ahead of the serial pass
+            // on another thread, as single_query does.
             const auto wall_query = [&](std::uint32_t c, std::uint32_t a, std::uint32_t w,
                                         const auto& lookup, AheadPair& out) {
                 out.touching = false;
@@ -1349,26 +1343,15 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 if (lazy && !keeps_radius(old)) {
                     ec = element_wall_contact(A, ws);
                 }
-                out.touching = true;
-                out.a = a;
-                out.b = w;
-                out.key = key;
-                out.ec = ec;
-                out.old = old;
-                out.ratio = ec.overlap / ratio_size(A, nullptr);
+                out.found(a, w, key, ec, old, ec.overlap / ratio_size(A, nullptr));
             };
             // The contact of a wall_query, taken in the serial order.
             const auto take_wall = [&](const AheadPair& s) {
                 if (!s.touching) {
                     return;
                 }
-                const ContactGroup g{1, s.a, s.b, 0};
-                const int material = spec_.walls[s.b].material;
-                if (convex_blocks_) {
-                    queue_convex(s.a, -1, s.key, g, s.ec, s.old, material, s.ratio);
-                } else {
-                    apply(s.a, -1, s.key, g, s.ec, s.old, material, s.ratio, wall_totals);
-                }
+                hand_over(s, -1, ContactGroup{1, s.a, s.b, 0}, spec_.walls[s.b].material,
+                          wall_totals);
             };
             // Does body a take wall_query: one element, not a sphere?
             const auto convex_body = [&](std::uint32_t a) {

@@ -27,13 +27,12 @@ struct SimplexPoint {
 };
 
 /// A GJK simplex in fixed storage (at most four points; a heap vector per iteration was a tenth
-/// of the query), with the squared distance and weights of its nearest point as the last
-/// closest_on_simplex found them (infinity: none yet).
+/// of the query), with the squared distance of its nearest point as the last closest_on_simplex
+/// found it (infinity: none yet).
 struct Simplex {
     std::array<SimplexPoint, 4> p{};
     int n = 0;
     double d2 = std::numeric_limits<double>::infinity();
-    std::array<double, 4> weights{};
     [[nodiscard]] const SimplexPoint& operator[](std::size_t k) const { return p[k]; }
 };
 
@@ -41,14 +40,14 @@ struct Simplex {
 /// the affine minimiser of each whose barycentric weights are all >= 0, keeps the nearest
 /// (the true closest point lies in the relative interior of one face, where it is that face's
 /// affine minimiser; the first in mask order of equal ones). Reduces `s` to the supporting face;
-/// `lambda` gets its weights. Returns false when no sub-simplex qualifies (numerically
-/// degenerate).
+/// `lambda` gets its weights (on entry: the last call's, which it set). Returns false when no
+/// sub-simplex qualifies (numerically degenerate).
 ///
 /// Only the sub-simplices with the newest point (the last) are evaluated: the others are faces of
 /// the simplex of the last call, which that call reduced to its winner, and they come first in
 /// mask order, in the same order and with the same arithmetic as then. So the best of them is
-/// that winner (the whole old simplex, mask 2^(n-1) - 1) with its stored distance and weights,
-/// exactly as an evaluation of all of them would find.
+/// that winner (the whole old simplex, mask 2^(n-1) - 1) with its stored distance and the weights
+/// in `lambda`, exactly as an evaluation of all of them would find.
 bool closest_on_simplex(Simplex& s, std::array<double, 4>& lambda) {
     const int n = s.n;
     double best = std::numeric_limits<double>::infinity();
@@ -57,9 +56,9 @@ bool closest_on_simplex(Simplex& s, std::array<double, 4>& lambda) {
     if (n > 1 && s.d2 < std::numeric_limits<double>::infinity()) {
         best = s.d2;
         best_mask = (1 << (n - 1)) - 1;
-        best_l = s.weights;
+        best_l = lambda;
     }
-    for (int mask = (n > 1 && best_mask != 0) ? 1 << (n - 1) : 1; mask < (1 << n); ++mask) {
+    for (int mask = best_mask != 0 ? 1 << (n - 1) : 1; mask < (1 << n); ++mask) {
         std::array<int, 4> idx{};
         int k = 0;
         for (int v = 0; v < n; ++v) {
@@ -126,7 +125,6 @@ bool closest_on_simplex(Simplex& s, std::array<double, 4>& lambda) {
     }
     s.n = k;
     s.d2 = best;
-    s.weights = lambda;
     return true;
 }
 

@@ -199,10 +199,13 @@ void ThermalSystem::add_radiation(const dynamics::System& sys, std::vector<doubl
         const heat::NearPair& np = near[k];
         ContactData d = base_of(np);
         if (with_body(np)) {
-            BodyView& v = !ahead.empty() && ahead[k].ready ? ahead[k] : one;
-            if (&v == &one) {
-                body_view(np, v);
+            BodyView* found = &one;
+            if (!ahead.empty() && ahead[k].ready) {
+                found = &ahead[k];
+            } else {
+                body_view(np, one);
             }
+            BodyView& v = *found;
             if (!v.exchanges) {
                 continue;
             }
