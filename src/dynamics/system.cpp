@@ -1113,13 +1113,8 @@ void System::compute_forces(bool kick_requested, bool forces_cleared) {
                     const std::size_t begin = u * pair_chunk_size;
                     if (no_sphere_pairs) {
                         // Every entry has a body (body_forces): nothing to evaluate here, and
-                        // their histories in the list stay zero.
-                        if (!direct) {
-                            std::fill(result_row_.begin() + static_cast<std::ptrdiff_t>(begin),
-                                      result_row_.begin() + static_cast<std::ptrdiff_t>(std::min(
-                                                                entries, begin + pair_chunk_size)),
-                                      static_cast<std::uint32_t>(entries));
-                        }
+                        // their histories in the list stay zero (no rows: the particle pass
+                        // below clears the forces instead of summing zero rows).
                         continue;
                     }
                     const std::size_t end = std::min(entries, begin + pair_chunk_size);
@@ -1152,7 +1147,12 @@ void System::compute_forces(bool kick_requested, bool forces_cleared) {
                 for (std::size_t u = 0; u < particle_units; ++u) {
                     const std::size_t p0 = u * particle_unit_size;
                     const std::size_t p1 = std::min(n, p0 + particle_unit_size);
-                    if (!direct) {
+                    if (!direct && no_sphere_pairs) {
+                        for (std::size_t i = p0; i < p1; ++i) { // the sum of zero rows
+                            p_.force[i] = Vec3::Zero();
+                            p_.torque[i] = Vec3::Zero();
+                        }
+                    } else if (!direct) {
                         for (std::size_t i = p0; i < p1; ++i) {
                             sum_pair_results(i);
                         }

@@ -185,6 +185,11 @@ class System {
     /// the route before session 12, for tests and A/B). Same contacts and order; the forces agree
     /// to round-off (GCC contracts a * b + c differently in the two routes).
     void use_convex_blocks(bool on) { convex_blocks_ = on; }
+    /// Bodies from which the per-body passes of a step (posing, rotation) and the law of clump
+    /// member pairs run on several threads, when there are several (default 512: below it a
+    /// parallel region per pass costs more than it saves; tests set it lower to run those
+    /// routes on small scenes). The results are the same bits either way.
+    void use_parallel_bodies(std::size_t min_bodies) { parallel_bodies_ = min_bodies; }
     /// Turns the inner list of the sphere pair filter (a two-level Verlet list) on (the default)
     /// or off. The results are the same bits either way (tests, A/B).
     void use_inner_list(bool on) {
@@ -324,6 +329,7 @@ class System {
     enum class Filter : std::uint8_t { all, build, inner }; // the pair filter of this step
     Filter filter_ = Filter::all;
     int threads_ = 1;
+    std::size_t parallel_bodies_ = 512; // use_parallel_bodies()
     ContactCounters counters_;
     TimeStepReport ts_;
     std::vector<std::string> warnings_;
@@ -454,7 +460,6 @@ class System {
     // Elements of every particle, this step; only the slots of superquadrics and polyhedra are
     // written (sphere elements live in member_c_ alone).
     std::vector<Element> elements_;
-    std::vector<Element> pose_buf_; // scratch of posing one particle
     // Centre (m, world) and radius (m) of every element of elements_, this step, 32 bytes each
     // (radius 0 for an element that is not a sphere): what the member-pair loop reads.
     struct MemberSphere {

@@ -34,20 +34,38 @@ void System::rotate_bodies(int kicks, bool drift) {
     // One rotation matrix per body and step: it turns L into the body frame for the free
     // rotation (bodies eight at a time in vector lanes), is then replaced by that of the new q,
     // and gives omega (no quaternion-vector products).
-    for (const std::uint32_t i : bodies_) {
-        for (int k = 0; k < kicks; ++k) {
-            geometry::kick_angular_momentum(p_.ang_mom[i], p_.torque[i], h);
+    //
+    // Bodies by runs of `run` (a multiple of the rotation's eight lanes, so every body keeps its
+    // lane and batch): every body's update reads and writes only its own state, so the runs may
+    // go to several threads with the same bits. Only with enough bodies: a parallel region per
+    // step costs more than the rotation of a few hundred bodies (docs/performance.md).
+    constexpr std::size_t run = 64;
+    static_assert(run % 8 == 0, "runs of whole batches of the free rotation");
+    const std::size_t n = bodies_.size();
+    const auto runs = static_cast<std::ptrdiff_t>((n + run - 1) / run);
+    const bool parallel = threads_ > 1 && n >= parallel_bodies_;
+#pragma omp parallel for num_threads(threads_) schedule(static) if (parallel)
+    for (std::ptrdiff_t r = 0; r < runs; ++r) {
+        const std::size_t b0 = static_cast<std::size_t>(r) * run;
+        const std::size_t b1 = std::min(n, b0 + run);
+        for (std::size_t b = b0; b < b1; ++b) {
+            const std::uint32_t i = bodies_[b];
+            for (int k = 0; k < kicks; ++k) {
+                geometry::kick_angular_momentum(p_.ang_mom[i], p_.torque[i], h);
+            }
         }
-    }
-    if (drift) {
-        geometry::free_rotate_bodies(bodies_.data(), bodies_.size(), p_.q.data(), rot_.data(),
-                                     p_.ang_mom.data(), p_.inertia.data(), spec_.time_step);
-        for (const std::uint32_t i : bodies_) {
-            rot_[i] = geometry::unit_rotation_matrix(p_.q[i]);
+        if (drift) {
+            geometry::free_rotate_bodies(bodies_.data() + b0, b1 - b0, p_.q.data(), rot_.data(),
+                                         p_.ang_mom.data(), p_.inertia.data(), spec_.time_step);
+            for (std::size_t b = b0; b < b1; ++b) {
+                const std::uint32_t i = bodies_[b];
+                rot_[i] = geometry::unit_rotation_matrix(p_.q[i]);
+            }
         }
-    }
-    for (const std::uint32_t i : bodies_) {
-        p_.omega[i] = geometry::angular_velocity_world(rot_[i], p_.ang_mom[i], p_.inertia[i]);
+        for (std::size_t b = b0; b < b1; ++b) {
+            const std::uint32_t i = bodies_[b];
+            p_.omega[i] = geometry::angular_velocity_world(rot_[i], p_.ang_mom[i], p_.inertia[i]);
+        }
     }
 }
 
@@ -335,27 +353,39 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
     // The elements are written in place at a running index: member_c_ keeps its size from step
     // to step (it only grows, when particles are added), so it is neither cleared nor filled (a
     // push_back per member was most of a clump scene's posing).
+    // The elements' slots first (a clump's members, one for any other particle), then every
+    // particle posed into its own slots: the posing of one particle reads and writes nothing of
+    // another's, so with enough bodies it runs on several threads, with the same bits.
     element_begin_.resize(p_.size() + 1);
     std::size_t n_elements = 0;
-    std::size_t n_convex = 0; // particles of one convex element (polyhedron, superquadric)
-    const auto room = [&](std::size_t n) {
-        if (member_c_.size() < n_elements + n) {
-            member_c_.resize(n_elements + n);
-        }
-        return member_c_.data() + n_elements;
-    };
     for (std::size_t i = 0; i < p_.size(); ++i) {
-        const std::size_t e0 = n_elements;
-        element_begin_[i] = static_cast<std::uint32_t>(e0);
+        element_begin_[i] = static_cast<std::uint32_t>(n_elements);
+        const int s = p_.shape[i];
+        const std::size_t members =
+            s >= 0 ? member_columns_[static_cast<std::size_t>(s)].n : std::size_t{0};
+        n_elements += members > 0 ? members : 1;
+    }
+    element_begin_[p_.size()] = static_cast<std::uint32_t>(n_elements);
+    member_c_.resize(n_elements);
+    if (elements_.size() < n_elements) {
+        elements_.resize(n_elements);
+    }
+    std::size_t n_convex = 0; // particles of one convex element (polyhedron, superquadric)
+    bool unexpected = false;  // a particle that is not a clump posed as several elements
+    const auto n_particles = static_cast<std::ptrdiff_t>(p_.size());
+#pragma omp parallel for num_threads(threads_) schedule(static, 64)                               \
+    reduction(+ : n_convex) reduction(|| : unexpected) if (threads_ > 1 &&                         \
+                                                           bodies_.size() >= parallel_bodies_)
+    for (std::ptrdiff_t pi = 0; pi < n_particles; ++pi) {
+        const auto i = static_cast<std::size_t>(pi);
+        const std::size_t e0 = element_begin_[i];
+        MemberSphere* out = member_c_.data() + e0;
         const geometry::ShapeTemplate* t = tmpl(static_cast<std::uint32_t>(i));
         if (t == nullptr) { // a sphere
-            *room(1) = {p_.x[i].x(), p_.x[i].y(), p_.x[i].z(), p_.radius[i]};
-            ++n_elements;
+            *out = {p_.x[i].x(), p_.x[i].y(), p_.x[i].z(), p_.radius[i]};
             continue;
         }
-        if (const auto* c = std::get_if<geometry::Clump>(&t->shape)) { // as append_elements
-            MemberSphere* out = room(c->spheres.size());
-            n_elements += c->spheres.size();
+        if (std::holds_alternative<geometry::Clump>(t->shape)) { // as append_elements
             static_assert(sizeof(MemberSphere) == 4 * sizeof(double), "x, y, z, r packed");
             pose_members(p_.x[i], rot_[i], member_columns_[static_cast<std::size_t>(p_.shape[i])],
                          reinterpret_cast<double*>(out));
@@ -365,25 +395,24 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             !poly_features_[static_cast<std::size_t>(p_.shape[i])].edges.empty()
                 ? &poly_features_[static_cast<std::size_t>(p_.shape[i])]
                 : nullptr;
-        pose_buf_.clear();
-        append_elements(t, features, p_.x[i], p_.q[i], rot_[i], p_.radius[i], pose_buf_);
-        if (pose_buf_.size() != 1) {
-            throw std::logic_error("body_forces: a particle that is not a clump has one element");
+        thread_local std::vector<Element> pose_buf; // scratch of posing one particle
+        pose_buf.clear();
+        append_elements(t, features, p_.x[i], p_.q[i], rot_[i], p_.radius[i], pose_buf);
+        if (pose_buf.size() != 1) {
+            unexpected = true;
+            continue;
         }
-        const Element& E = pose_buf_[0];
+        const Element& E = pose_buf[0];
         const bool sphere = E.kind == Element::Kind::sphere;
-        *room(1) = {E.centre.x(), E.centre.y(), E.centre.z(), sphere ? E.radius : 0.0};
-        ++n_elements;
+        *out = {E.centre.x(), E.centre.y(), E.centre.z(), sphere ? E.radius : 0.0};
         if (!sphere) {
-            if (elements_.size() <= e0) {
-                elements_.resize(e0 + 1);
-            }
             elements_[e0] = E;
             ++n_convex;
         }
     }
-    element_begin_[p_.size()] = static_cast<std::uint32_t>(n_elements);
-    member_c_.resize(n_elements);
+    if (unexpected) {
+        throw std::logic_error("body_forces: a particle that is not a clump has one element");
+    }
     // travel_ brought up to this pose (system.hpp), in a loop of its own over the bodies (inside
     // the posing loop above its chain of operations waited on that loop's branches). Only
     // polyhedra read it: travel_r_ is 0 for the other bodies.
