@@ -504,6 +504,18 @@ class System {
         std::vector<ElementContact> plan;
     };
     std::vector<AheadPair> ahead_;
+    // The law's answers for the clump member pairs of one block of the sphere queue (16 lanes),
+    // found ahead of the serial pass on several threads (body_forces): what the serial pass's
+    // flush reads to add the forces in its order, and the onset's data when it records onsets.
+    struct MemberBlock {
+        static constexpr std::size_t lanes = 16;
+        double f[3][lanes], ra[3][lanes], rb[3][lanes], ti[3][lanes], tj[3][lanes];
+        double s[3][lanes], energy[lanes], ratio[lanes];
+        double n[3][lanes], p[3][lanes], v[3][lanes], m_eff[lanes], r_eff[lanes]; // onsets
+        bool is_new[lanes];
+    };
+    std::vector<MemberBlock> member_blocks_;
+    std::vector<std::uint32_t> member_order_; // the member pairs among the hits, in order
     std::vector<AheadPair> wall_ahead_; // the same for body_walls_ (a is the body, b the wall)
     // A body's elements near a plane or cylinder wall (scratch of body_forces' wall pass).
     std::vector<std::uint32_t> wall_hits_;

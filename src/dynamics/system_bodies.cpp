@@ -18,6 +18,75 @@ namespace kiln::dynamics {
 
 namespace {
 
+/// Lanes of body_forces' sphere queue (pairs of sphere elements, and sphere elements against
+/// plane or cylinder walls).
+constexpr std::size_t queue_lanes = 16;
+
+/// The sphere queue's lanes (world frame): the law's block, and the raw data of queued sphere
+/// pairs (element centres ca and cb, radii, body centres, velocities and masses, R* of the first
+/// touch (0: none), ratio scale), then their geometry (contact point, lever arms from the centres
+/// of mass, overlap ratio).
+struct SphereLanes {
+    static constexpr std::size_t L = queue_lanes;
+    contact::ContactBlock<L> cb;
+    double ca[3][L], cb_[3][L], xa[3][L], xb[3][L], va[3][L], vb[3][L];
+    double rada[L], radb[L], ma[L], mb[L], r0[L], size[L];
+    double p[3][L], ra[3][L], rb[3][L], ratio[L];
+    bool is_new[L]; // the contact is new this step (heat: impact onsets)
+};
+
+/// The first `queued` lanes of `q` through the law (`raw`: sphere pairs, whose geometry is
+/// derived first from the raw data, in vector lanes). One out-of-line instance per law, called by
+/// the serial pass and by the threads that run the member pairs ahead of it, so that both give
+/// the same bits (GCC contracts a * b + c into FMAs per inlined copy).
+template <class Law>
+[[gnu::noinline]] void evaluate_sphere_lanes(const Law& law, double fn_floor, double rolling,
+                                             double dt, SphereLanes& q, std::size_t queued,
+                                             bool raw) {
+    contact::ContactBlock<queue_lanes>& cb = q.cb;
+    if (raw) {
+#pragma omp simd
+        for (std::size_t k = 0; k < queued; ++k) {
+            const double d0 = q.ca[0][k] - q.cb_[0][k];
+            const double d1 = q.ca[1][k] - q.cb_[1][k];
+            const double d2 = q.ca[2][k] - q.cb_[2][k];
+            const double dist = std::sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+            const double rsum = q.rada[k] + q.radb[k];
+            const double overlap = rsum - dist;
+            const double inv = 1.0 / dist;
+            const double n[3] = {d0 * inv, d1 * inv, d2 * inv};
+            const double to_point = q.radb[k] - 0.5 * overlap;
+            double ra[3], rb[3];
+            for (int c = 0; c < 3; ++c) {
+                q.p[c][k] = q.cb_[c][k] + to_point * n[c];
+                ra[c] = q.p[c][k] - q.xa[c][k];
+                rb[c] = q.p[c][k] - q.xb[c][k];
+                q.ra[c][k] = ra[c];
+                q.rb[c][k] = rb[c];
+                cb.n[c][k] = n[c];
+            }
+            const double(&wa)[3][queue_lanes] = cb.wi;
+            const double(&wb)[3][queue_lanes] = cb.wj;
+            // v_a + w_a x r_a - v_b - w_b x r_b: the velocity of the contact point
+            cb.v[0][k] = q.va[0][k] + (wa[1][k] * ra[2] - wa[2][k] * ra[1]) - q.vb[0][k] -
+                         (wb[1][k] * rb[2] - wb[2][k] * rb[1]);
+            cb.v[1][k] = q.va[1][k] + (wa[2][k] * ra[0] - wa[0][k] * ra[2]) - q.vb[1][k] -
+                         (wb[2][k] * rb[0] - wb[0][k] * rb[2]);
+            cb.v[2][k] = q.va[2][k] + (wa[0][k] * ra[1] - wa[1][k] * ra[0]) - q.vb[2][k] -
+                         (wb[0][k] * rb[1] - wb[1][k] * rb[0]);
+            cb.overlap[k] = overlap;
+            const double r_geo = q.rada[k] * q.radb[k] / rsum;
+            cb.r_eff[k] = q.r0[k] > 0.0 ? q.r0[k] : r_geo;
+            cb.m_eff[k] = q.ma[k] * q.mb[k] / (q.ma[k] + q.mb[k]);
+            q.ratio[k] = overlap / q.size[k];
+        }
+    }
+#pragma omp simd
+    for (std::size_t k = 0; k < queued; ++k) {
+        contact::evaluate_block(law, fn_floor, rolling, cb, k, dt);
+    }
+}
+
 /// Smallest element size of a contact, for the overlap ratio.
 double ratio_size(const Element& a, const Element* b) {
     return 2.0 * std::min(a.min_size, b ? b->min_size : a.min_size);
@@ -509,22 +578,17 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // forces and torques about each body's centre of mass are added in the order the
             // contacts were met. The record's slot in the next table is taken when the contact is
             // met, so the table keeps its order; its geometry is filled in at the flush.
-            constexpr std::size_t block = 16;
-            contact::ContactBlock<block> cb;
+            constexpr std::size_t block = queue_lanes;
+            static_assert(block == MemberBlock::lanes, "a member block is one flush of the queue");
+            SphereLanes lanes;
+            contact::ContactBlock<block>& cb = lanes.cb;
             // q_slot: the record's slot in the next table, or member_slot | the member pair's index
             // (its history goes to member_shear_ and member_force_, no record).
             constexpr std::uint32_t member_slot = 0x80000000U;
             std::uint32_t q_a[block], q_b[block], q_slot[block];
-            bool q_new[block]; // the queued contact is new this step (heat: impact onsets)
-            // Raw data of queued sphere pairs (world frame): element centres and radii, body
-            // centres, velocities, masses, R* of the first touch (0: none), ratio scale.
-            double g_ca[3][block], g_cb[3][block], g_xa[3][block], g_xb[3][block];
-            double g_va[3][block], g_vb[3][block];
-            double g_rada[block], g_radb[block], g_ma[block], g_mb[block], g_r0[block],
-                g_size[block];
-            // Geometry of the queued contacts: contact point and lever arms from the centres of
-            // mass (m, world), overlap ratio.
-            double g_p[3][block], g_ra[3][block], g_rb[3][block], q_ratio[block];
+            bool(&q_new)[block] = lanes.is_new;
+            double(&g_ra)[3][block] = lanes.ra;
+            double(&q_ratio)[block] = lanes.ratio;
             std::size_t queued = 0;
             bool raw_pairs = true; // the queue holds sphere pairs (raw) or wall contacts (posed)
             ChunkTotals* queue_totals = &pair_totals; // where flush() counts the queued contacts
@@ -628,84 +692,70 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     flush_convex();
                 }
             };
+            // Member pairs whose law ran ahead of the serial pass (members_ahead, below): one
+            // MemberBlock per flush of the queue, taken in order by flush().
+            bool members_ahead = false;
+            std::size_t next_block = 0;
             const auto flush = [&] {
                 flush_convex(); // contacts met before the pending sphere contacts go first
-                if (raw_pairs) {
-#pragma omp simd
-                    for (std::size_t q = 0; q < queued; ++q) {
-                        const double d0 = g_ca[0][q] - g_cb[0][q];
-                        const double d1 = g_ca[1][q] - g_cb[1][q];
-                        const double d2 = g_ca[2][q] - g_cb[2][q];
-                        const double dist = std::sqrt(d0 * d0 + d1 * d1 + d2 * d2);
-                        const double rsum = g_rada[q] + g_radb[q];
-                        const double overlap = rsum - dist;
-                        const double inv = 1.0 / dist;
-                        const double n[3] = {d0 * inv, d1 * inv, d2 * inv};
-                        const double to_point = g_radb[q] - 0.5 * overlap;
-                        double ra[3], rb[3];
-                        for (int c = 0; c < 3; ++c) {
-                            g_p[c][q] = g_cb[c][q] + to_point * n[c];
-                            ra[c] = g_p[c][q] - g_xa[c][q];
-                            rb[c] = g_p[c][q] - g_xb[c][q];
-                            g_ra[c][q] = ra[c];
-                            g_rb[c][q] = rb[c];
-                            cb.n[c][q] = n[c];
-                        }
-                        const double(&wa)[3][block] = cb.wi;
-                        const double(&wb)[3][block] = cb.wj;
-                        // v_a + w_a x r_a - v_b - w_b x r_b: the velocity of the contact point
-                        cb.v[0][q] = g_va[0][q] + (wa[1][q] * ra[2] - wa[2][q] * ra[1]) -
-                                     g_vb[0][q] - (wb[1][q] * rb[2] - wb[2][q] * rb[1]);
-                        cb.v[1][q] = g_va[1][q] + (wa[2][q] * ra[0] - wa[0][q] * ra[2]) -
-                                     g_vb[1][q] - (wb[2][q] * rb[0] - wb[0][q] * rb[2]);
-                        cb.v[2][q] = g_va[2][q] + (wa[0][q] * ra[1] - wa[1][q] * ra[0]) -
-                                     g_vb[2][q] - (wb[0][q] * rb[1] - wb[1][q] * rb[0]);
-                        cb.overlap[q] = overlap;
-                        const double r_geo = g_rada[q] * g_radb[q] / rsum;
-                        cb.r_eff[q] = g_r0[q] > 0.0 ? g_r0[q] : r_geo;
-                        cb.m_eff[q] = g_ma[q] * g_mb[q] / (g_ma[q] + g_mb[q]);
-                        q_ratio[q] = overlap / g_size[q];
-                    }
+                const MemberBlock* pre = nullptr;
+                if (raw_pairs && members_ahead && queued > 0) {
+                    pre = &member_blocks_[next_block++];
+                } else {
+                    evaluate_sphere_lanes(law, fn_floor, rolling, dt, lanes, queued, raw_pairs);
                 }
-#pragma omp simd
-                for (std::size_t q = 0; q < queued; ++q) {
-                    contact::evaluate_block(law, fn_floor, rolling, cb, q, dt);
-                }
+                // The law's answers: the lanes', or those found ahead.
+                using Rows = const double(*)[block];
+                const Rows f_q = pre != nullptr ? pre->f : cb.f;
+                const Rows ra_q = pre != nullptr ? pre->ra : lanes.ra;
+                const Rows rb_q = pre != nullptr ? pre->rb : lanes.rb;
+                const Rows ti_q = pre != nullptr ? pre->ti : cb.ti;
+                const Rows tj_q = pre != nullptr ? pre->tj : cb.tj;
+                const Rows s_q = pre != nullptr ? pre->s : cb.s;
+                const Rows n_q = pre != nullptr ? pre->n : cb.n;
+                const Rows p_q = pre != nullptr ? pre->p : lanes.p;
+                const Rows v_q = pre != nullptr ? pre->v : cb.v;
+                const double* energy_q = pre != nullptr ? pre->energy : cb.energy;
+                const double* ratio_q = pre != nullptr ? pre->ratio : lanes.ratio;
+                const double* m_eff_q = pre != nullptr ? pre->m_eff : cb.m_eff;
+                const double* r_eff_q = pre != nullptr ? pre->r_eff : cb.r_eff;
+                const bool* new_q = pre != nullptr ? pre->is_new : lanes.is_new;
                 for (std::size_t q = 0; q < queued; ++q) {
                     const std::uint32_t a = q_a[q];
                     const std::uint32_t b = q_b[q];
-                    const Vec3 f(cb.f[0][q], cb.f[1][q], cb.f[2][q]);
-                    const Vec3 ra(g_ra[0][q], g_ra[1][q], g_ra[2][q]);
+                    const Vec3 f(f_q[0][q], f_q[1][q], f_q[2][q]);
+                    const Vec3 ra(ra_q[0][q], ra_q[1][q], ra_q[2][q]);
                     p_.force[a] += f;
-                    p_.torque[a] += ra.cross(f) + Vec3(cb.ti[0][q], cb.ti[1][q], cb.ti[2][q]);
+                    p_.torque[a] += ra.cross(f) + Vec3(ti_q[0][q], ti_q[1][q], ti_q[2][q]);
                     if (b != no_element) { // a wall takes no reaction
-                        const Vec3 rb(g_rb[0][q], g_rb[1][q], g_rb[2][q]);
+                        const Vec3 rb(rb_q[0][q], rb_q[1][q], rb_q[2][q]);
                         p_.force[b] -= f;
-                        p_.torque[b] += Vec3(cb.tj[0][q], cb.tj[1][q], cb.tj[2][q]) - rb.cross(f);
+                        p_.torque[b] += Vec3(tj_q[0][q], tj_q[1][q], tj_q[2][q]) - rb.cross(f);
                     }
                     if (raw_pairs && (q_slot[q] & member_slot) != 0) { // a member pair
                         const std::uint32_t i = q_slot[q] & ~member_slot;
-                        member_shear_[i] = Vec3(cb.s[0][q], cb.s[1][q], cb.s[2][q]);
+                        member_shear_[i] = Vec3(s_q[0][q], s_q[1][q], s_q[2][q]);
                         member_force_[i] = f;
-                        if (record_body_onsets_ && q_new[q]) { // heat: impact onset
-                            note_body_onset(
-                                member_keys_[i], Vec3(cb.n[0][q], cb.n[1][q], cb.n[2][q]),
-                                Vec3(g_p[0][q], g_p[1][q], g_p[2][q]),
-                                Vec3(cb.v[0][q], cb.v[1][q], cb.v[2][q]), cb.m_eff[q], cb.r_eff[q]);
+                        if (record_body_onsets_ && new_q[q]) { // heat: impact onset
+                            note_body_onset(member_keys_[i], Vec3(n_q[0][q], n_q[1][q], n_q[2][q]),
+                                            Vec3(p_q[0][q], p_q[1][q], p_q[2][q]),
+                                            Vec3(v_q[0][q], v_q[1][q], v_q[2][q]), m_eff_q[q],
+                                            r_eff_q[q]);
                         }
-                        queue_totals->energy += cb.energy[q];
-                        queue_totals->max_ratio = std::max(queue_totals->max_ratio, q_ratio[q]);
+                        queue_totals->energy += energy_q[q];
+                        queue_totals->max_ratio = std::max(queue_totals->max_ratio, ratio_q[q]);
                         ++queue_totals->contacts;
                         continue;
                     }
                     // The record in one pass: sphere pairs fill in their geometry here too (the
-                    // law reads but does not change n, overlap, r_eff, v and m_eff).
+                    // law reads but does not change n, overlap, r_eff, v and m_eff). Only from
+                    // the lanes: the member blocks hold member pairs alone.
                     BodyContact& rec = next_contacts_[q_slot[q]].contact;
                     rec.shear = Vec3(cb.s[0][q], cb.s[1][q], cb.s[2][q]);
                     rec.force = f;
                     if (raw_pairs) {
                         rec.normal = Vec3(cb.n[0][q], cb.n[1][q], cb.n[2][q]);
-                        rec.point = Vec3(g_p[0][q], g_p[1][q], g_p[2][q]);
+                        rec.point = Vec3(lanes.p[0][q], lanes.p[1][q], lanes.p[2][q]);
                         rec.overlap = cb.overlap[q];
                         rec.r_eff = cb.r_eff[q];
                         if (record_body_onsets_ && q_new[q]) { // heat: impact onset (system.cpp)
@@ -756,39 +806,45 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     flush();
                 }
             };
+            // Lane q of `L`: the raw data of the pair of sphere elements A (of a) and B (of b).
+            // `shear`: the last step's history (nullptr: a new contact); `r0`: R* of the first
+            // touch, or 0. Writes only L (the threads that run member pairs ahead fill their own).
+            const auto fill_lane = [&](SphereLanes& L, std::size_t q, std::uint32_t a,
+                                       std::uint32_t b, const MemberSphere& A,
+                                       const MemberSphere& B, const Vec3* shear, double r0) {
+                L.ca[0][q] = A.x;
+                L.ca[1][q] = A.y;
+                L.ca[2][q] = A.z;
+                L.cb_[0][q] = B.x;
+                L.cb_[1][q] = B.y;
+                L.cb_[2][q] = B.z;
+                for (int c = 0; c < 3; ++c) {
+                    L.xa[c][q] = p_.x[a][c];
+                    L.xb[c][q] = p_.x[b][c];
+                    L.va[c][q] = p_.v[a][c];
+                    L.vb[c][q] = p_.v[b][c];
+                    L.cb.wi[c][q] = p_.omega[a][c];
+                    L.cb.wj[c][q] = p_.omega[b][c];
+                    L.cb.s[c][q] = shear != nullptr ? (*shear)[c] : 0.0;
+                }
+                L.rada[q] = A.r;
+                L.radb[q] = B.r;
+                L.ma[q] = p_.mass[a];
+                L.mb[q] = p_.mass[b];
+                L.r0[q] = r0;
+                L.size[q] = 2.0 * std::min(A.r, B.r); // ratio_size of two sphere elements
+                L.is_new[q] = shear == nullptr;
+                L.cb.set_pair(q, pairs_.at(p_.material[a], p_.material[b]));
+            };
             // Queues the contact of sphere elements A (of a) and B (of b), centres closer than the
-            // sum of their radii (and distinct), into `slot` (q_slot). `shear`: the last step's
-            // history (nullptr: a new contact); `r0`: R* of the first touch, or 0.
+            // sum of their radii (and distinct), into `slot` (q_slot); shear and r0 as fill_lane.
             const auto queue_spheres = [&](std::uint32_t a, std::uint32_t b, const MemberSphere& A,
                                            const MemberSphere& B, std::uint32_t slot,
                                            const Vec3* shear, double r0) {
-                const std::size_t q = queued;
-                g_ca[0][q] = A.x;
-                g_ca[1][q] = A.y;
-                g_ca[2][q] = A.z;
-                g_cb[0][q] = B.x;
-                g_cb[1][q] = B.y;
-                g_cb[2][q] = B.z;
-                for (int c = 0; c < 3; ++c) {
-                    g_xa[c][q] = p_.x[a][c];
-                    g_xb[c][q] = p_.x[b][c];
-                    g_va[c][q] = p_.v[a][c];
-                    g_vb[c][q] = p_.v[b][c];
-                    cb.wi[c][q] = p_.omega[a][c];
-                    cb.wj[c][q] = p_.omega[b][c];
-                    cb.s[c][q] = shear != nullptr ? (*shear)[c] : 0.0;
-                }
-                g_rada[q] = A.r;
-                g_radb[q] = B.r;
-                g_ma[q] = p_.mass[a];
-                g_mb[q] = p_.mass[b];
-                g_r0[q] = r0;
-                g_size[q] = 2.0 * std::min(A.r, B.r); // ratio_size of two sphere elements
-                q_new[q] = shear == nullptr;
-                cb.set_pair(q, pairs_.at(p_.material[a], p_.material[b]));
-                q_a[q] = a;
-                q_b[q] = b;
-                q_slot[q] = slot;
+                fill_lane(lanes, queued, a, b, A, B, shear, r0);
+                q_a[queued] = a;
+                q_b[queued] = b;
+                q_slot[queued] = slot;
                 if (++queued == block) {
                     flush();
                 }
@@ -1033,6 +1089,10 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                             if (planning) {
                                 continue;
                             }
+                            if (members_ahead) { // would enter a queue block found ahead
+                                throw std::logic_error(
+                                    "body_forces: two sphere elements in a general entry");
+                            }
                             if (A.centre != B.centre) { // coincident centres: no normal
                                 // R*: with first_touch, that of the contact's first step (the
                                 // same for spheres)
@@ -1222,6 +1282,73 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 }
                 return nullptr;
             };
+            // With several threads and enough bodies, the law of the member pairs among the hits
+            // runs ahead of the serial pass, block by block: the blocks are those the serial
+            // pass's queue flushes (only member pairs enter it before the walls: a general entry
+            // has a convex element in every element pair), each evaluated by the same code
+            // (evaluate_sphere_lanes) from the same inputs, so the answers are the same bits;
+            // the serial pass adds the forces in its order. Each block reads the poses and last
+            // step's histories (member_shear_, or the table by a search) and writes only its own
+            // MemberBlock.
+            members_ahead = threads_ > 1 && bodies_.size() >= parallel_bodies_;
+            next_block = 0;
+            if (members_ahead) {
+                member_order_.clear();
+                for (std::size_t h = 0; h < n_hits; ++h) {
+                    if (member_pairs_[member_hits_[h]].ea != no_element) {
+                        member_order_.push_back(member_hits_[h]);
+                    }
+                }
+                const std::size_t n_order = member_order_.size();
+                member_blocks_.resize((n_order + block - 1) / block);
+                const auto n_blocks = static_cast<std::ptrdiff_t>(member_blocks_.size());
+                const bool onsets = record_body_onsets_;
+#pragma omp parallel for num_threads(threads_) schedule(static)
+                for (std::ptrdiff_t bi = 0; bi < n_blocks; ++bi) {
+                    thread_local SphereLanes own; // zero-initialised: lever arms 0
+                    const std::size_t m0 = static_cast<std::size_t>(bi) * block;
+                    const std::size_t count = std::min(block, n_order - m0);
+                    for (std::size_t q = 0; q < count; ++q) {
+                        const std::uint32_t i = member_order_[m0 + q];
+                        const MemberPair& m = member_pairs_[i];
+                        const Vec3* shear = nullptr;
+                        double r0 = 0.0;
+                        if (from_table) { // as the serial branch below, by a search
+                            const BodyContactKey& key = member_keys_[i];
+                            const BodyContact* old = old_record(
+                                ContactGroup(0, m.k, 0, static_cast<std::uint32_t>(key.ea)),
+                                key.eb);
+                            shear = old != nullptr ? &old->shear : nullptr;
+                            r0 = first_touch && old != nullptr ? old->r_eff : 0.0;
+                        } else if (member_seen_[i] == body_eval_) {
+                            shear = &member_shear_[i];
+                        }
+                        fill_lane(own, q, m.a, m.b, member_c_[m.ea], member_c_[m.eb], shear, r0);
+                    }
+                    evaluate_sphere_lanes(law, fn_floor, rolling, dt, own, count, true);
+                    MemberBlock& out = member_blocks_[static_cast<std::size_t>(bi)];
+                    for (int c = 0; c < 3; ++c) {
+                        std::copy_n(own.cb.f[c], count, out.f[c]);
+                        std::copy_n(own.ra[c], count, out.ra[c]);
+                        std::copy_n(own.rb[c], count, out.rb[c]);
+                        std::copy_n(own.cb.ti[c], count, out.ti[c]);
+                        std::copy_n(own.cb.tj[c], count, out.tj[c]);
+                        std::copy_n(own.cb.s[c], count, out.s[c]);
+                    }
+                    std::copy_n(own.cb.energy, count, out.energy);
+                    std::copy_n(own.ratio, count, out.ratio);
+                    std::copy_n(own.is_new, count, out.is_new);
+                    if (onsets) {
+                        for (int c = 0; c < 3; ++c) {
+                            std::copy_n(own.cb.n[c], count, out.n[c]);
+                            std::copy_n(own.p[c], count, out.p[c]);
+                            std::copy_n(own.cb.v[c], count, out.v[c]);
+                        }
+                        std::copy_n(own.cb.m_eff, count, out.m_eff);
+                        std::copy_n(own.cb.r_eff, count, out.r_eff);
+                    }
+                }
+            }
             // (Only when there are convex bodies: a scene of clumps and spheres has no narrow
             // phase to run ahead, and the parallel region would cost more than it saves.)
             const bool ahead = threads_ > 1 && n_convex > 0 && n_hits > 1;
@@ -1308,6 +1435,16 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     continue;
                 }
                 const std::uint32_t i = member_hits_[h];
+                if (members_ahead) { // its law ran ahead: flush() takes the answers
+                    member_seen_[i] = eval;
+                    q_a[queued] = m.a;
+                    q_b[queued] = m.b;
+                    q_slot[queued] = member_slot | i;
+                    if (++queued == block) {
+                        flush();
+                    }
+                    continue;
+                }
                 const Vec3* shear = nullptr;
                 double r0 = 0.0; // a sphere pair's R* is the same at every step
                 if (from_table) {
@@ -1325,6 +1462,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             }
 
             flush();
+            if (members_ahead && next_block != member_blocks_.size()) {
+                throw std::logic_error("body_forces: member blocks found ahead left untaken");
+            }
             raw_pairs = false;
             queue_totals = &wall_totals;
 

@@ -298,6 +298,7 @@ SceneSpec clump_box(int threads) {
     SceneSpec s = base_scene();
     s.threads = threads;
     s.gravity.setZero();
+    s.record_contact_onsets = true; // as heat's collision conduction asks
     s.shapes.push_back(shape("cylinder_12"));
     constexpr int n = 6;
     constexpr double pitch = 9e-3; // m; the cylinder's bounding radius is 4.24 mm
@@ -334,21 +335,38 @@ TEST(Bodies, ClumpBoxGivesTheSameBitsForOneAndTwoThreads) {
     // run in parallel over the bodies (each reads and writes only its own), and the law of the
     // clumps' member pairs ahead of the serial pass that adds the forces in its order. Run here
     // from the first body on (the default waits for 512 bodies), so that both threads take part:
-    // positions, velocities, orientations, angular momenta, contact counts at every step and the
-    // contact records equal those of one thread.
+    // positions, velocities, orientations, angular momenta, contact counts and impact onsets at
+    // every step and the contact records equal those of one thread.
     System a(clump_box(1));
     System b(clump_box(2));
     ASSERT_EQ(b.threads(), 2);
     b.use_parallel_bodies(1);
     long contacts = 0;
+    long onsets = 0; // impacts recorded (heat's collision conduction reads them)
     for (int k = 0; k < 10000; ++k) {
         a.step();
         b.step();
         contacts += a.counters().particle_contacts;
         ASSERT_EQ(a.counters().particle_contacts, b.counters().particle_contacts) << k;
         ASSERT_EQ(a.counters().wall_contacts, b.counters().wall_contacts) << k;
+        const auto& oa = a.contact_onsets();
+        const auto& ob = b.contact_onsets();
+        ASSERT_EQ(oa.size(), ob.size()) << k;
+        for (std::size_t o = 0; o < oa.size(); ++o) {
+            EXPECT_EQ(oa[o].id_i, ob[o].id_i);
+            EXPECT_EQ(oa[o].id_j, ob[o].id_j);
+            EXPECT_EQ(oa[o].speed, ob[o].speed);
+            EXPECT_EQ(oa[o].m_eff, ob[o].m_eff);
+            EXPECT_EQ(oa[o].r_eff, ob[o].r_eff);
+            for (int c = 0; c < 3; ++c) {
+                EXPECT_EQ(oa[o].normal[c], ob[o].normal[c]);
+                EXPECT_EQ(oa[o].point[c], ob[o].point[c]);
+            }
+        }
+        onsets += static_cast<long>(oa.size());
     }
     EXPECT_GT(contacts, 100000);
+    EXPECT_GT(onsets, 300);
     ASSERT_EQ(a.particles().size(), b.particles().size());
     for (std::size_t i = 0; i < a.particles().size(); ++i) {
         EXPECT_EQ(a.particles().x[i], b.particles().x[i]); // exact equality is the point
@@ -366,8 +384,9 @@ TEST(Bodies, ClumpBoxGivesTheSameBitsForOneAndTwoThreads) {
         EXPECT_EQ(ra[k].contact.shear, rb[k].contact.shear);
         EXPECT_EQ(ra[k].contact.force, rb[k].contact.force);
     }
-    std::printf("%zu particles, %ld contacts over the run, %zu element contacts at the end\n",
-                a.particles().size(), contacts, ra.size());
+    std::printf("%zu particles, %ld contacts and %ld onsets over the run, %zu element contacts at "
+                "the end\n",
+                a.particles().size(), contacts, onsets, ra.size());
 }
 
 // advance(k) defers every step's second half kick (of v and of the bodies' angular momentum) to
