@@ -516,6 +516,7 @@ class System {
     };
     std::vector<MemberBlock> member_blocks_;
     std::vector<std::uint32_t> member_order_; // the member pairs among the hits, in order
+    std::vector<std::size_t> range_counts_;   // body_forces' first pass: hits, skips per range
     std::vector<AheadPair> wall_ahead_; // the same for body_walls_ (a is the body, b the wall)
     // A body's elements near a plane or cylinder wall (scratch of body_forces' wall pass).
     std::vector<std::uint32_t> wall_hits_;

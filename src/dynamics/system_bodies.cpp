@@ -1211,7 +1211,11 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             skipped_.resize(n_members);
             std::size_t n_hits = 0;
             std::size_t n_skipped = 0;
-            {
+            // The pass over items [i0, i1): their hits and skips written from member_hits_[i0]
+            // and skipped_[i0] on (a hit's index is never below the count before it, so a range
+            // writes only within itself), their counts to nh and ns.
+            const auto first_pass = [&](std::size_t i0, std::size_t i1, std::size_t& nh,
+                                        std::size_t& ns) {
                 const MemberPair* mp = member_pairs_.data();
                 const MemberSphere* c = member_c_.data();
                 const Vec3* x = p_.x.data();
@@ -1219,9 +1223,11 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 const double* travel = travel_.data();
                 const double* below = apart_below_.data();
                 const bool skips = separation_cache_ && !apart_below_.empty();
-                std::uint32_t* hits = member_hits_.data();
-                std::uint32_t* skipped = skipped_.data();
-                for (std::size_t i = 0; i < n_members; ++i) {
+                std::uint32_t* hits = member_hits_.data() + i0;
+                std::uint32_t* skipped = skipped_.data() + i0;
+                std::size_t n_h = 0;
+                std::size_t n_s = 0;
+                for (std::size_t i = i0; i < i1; ++i) {
                     const bool general = mp[i].ea == no_element;
                     bool hit = false;
                     if (general) { // the same kind for runs of items: predicted
@@ -1235,8 +1241,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         if (skips) {
                             const bool skip =
                                 hit & (travel[mp[i].a] + travel[mp[i].b] < below[mp[i].k]);
-                            skipped[n_skipped] = static_cast<std::uint32_t>(i);
-                            n_skipped += static_cast<std::size_t>(skip);
+                            skipped[n_s] = static_cast<std::uint32_t>(i);
+                            n_s += static_cast<std::size_t>(skip);
                             hit = hit & !skip;
                         }
                     } else {
@@ -1249,9 +1255,42 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         const double dd = d0 * d0 + d1 * d1 + d2 * d2;
                         hit = (dd < re * re) & (dd != 0.0);
                     }
-                    hits[n_hits] = static_cast<std::uint32_t>(i);
-                    n_hits += static_cast<std::size_t>(hit);
+                    hits[n_h] = static_cast<std::uint32_t>(i);
+                    n_h += static_cast<std::size_t>(hit);
                 }
+                nh = n_h;
+                ns = n_s;
+            };
+            // With several threads and enough bodies, the pass runs over ranges of items in
+            // parallel, and each range's hits and skips are moved down after those of the
+            // ranges before it: the same lists, in the same order (whatever the ranges: a few
+            // per thread, of 256 to 4096 items).
+            const std::size_t pass_range = std::clamp<std::size_t>(
+                n_members / (4 * static_cast<std::size_t>(threads_)), 256, 4096);
+            if (threads_ > 1 && bodies_.size() >= parallel_bodies_ && n_members > pass_range) {
+                const std::size_t n_ranges = (n_members + pass_range - 1) / pass_range;
+                range_counts_.resize(2 * n_ranges);
+                const auto ranges = static_cast<std::ptrdiff_t>(n_ranges);
+#pragma omp parallel for num_threads(threads_) schedule(static)
+                for (std::ptrdiff_t r = 0; r < ranges; ++r) {
+                    const std::size_t i0 = static_cast<std::size_t>(r) * pass_range;
+                    first_pass(i0, std::min(n_members, i0 + pass_range),
+                               range_counts_[2 * static_cast<std::size_t>(r)],
+                               range_counts_[2 * static_cast<std::size_t>(r) + 1]);
+                }
+                for (std::size_t r = 0; r < n_ranges; ++r) { // moved down: to <= from
+                    const auto from = static_cast<std::ptrdiff_t>(r * pass_range);
+                    const auto nh = static_cast<std::ptrdiff_t>(range_counts_[2 * r]);
+                    const auto ns = static_cast<std::ptrdiff_t>(range_counts_[2 * r + 1]);
+                    std::copy(member_hits_.begin() + from, member_hits_.begin() + from + nh,
+                              member_hits_.begin() + static_cast<std::ptrdiff_t>(n_hits));
+                    std::copy(skipped_.begin() + from, skipped_.begin() + from + ns,
+                              skipped_.begin() + static_cast<std::ptrdiff_t>(n_skipped));
+                    n_hits += range_counts_[2 * r];
+                    n_skipped += range_counts_[2 * r + 1];
+                }
+            } else {
+                first_pass(0, n_members, n_hits, n_skipped);
             }
             // The skipped near misses: the counts of general_entry's bounding-sphere tests (one
             // test for two single polyhedra: each element's centre and radius are its body's) and
