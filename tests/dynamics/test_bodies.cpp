@@ -334,7 +334,7 @@ TEST(Bodies, ClumpBoxGivesTheSameBitsForOneAndTwoThreads) {
     // With two threads the posing of every particle's elements and the rotation of the bodies
     // run in parallel over the bodies (each reads and writes only its own), and the law of the
     // clumps' member pairs ahead of the serial pass that adds the forces in its order. Run here
-    // from the first body on (the default waits for 512 bodies), so that both threads take part:
+    // from the first body on (the default waits for 256 bodies), so that both threads take part:
     // positions, velocities, orientations, angular momenta, contact counts and impact onsets at
     // every step and the contact records equal those of one thread.
     System a(clump_box(1));
