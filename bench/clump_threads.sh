@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Two threads against one on clump pours large enough for the body passes to run on the threads
-# (from 256 bodies; the lattice scenes of thread_speedup.sh have 343): the LIGGGHTS multisphere
+# Two threads against one on clump pours of thousands of bodies (the lattice scenes of
+# thread_speedup.sh have 343), whole runs from insertion to a settled bed: the LIGGGHTS multisphere
 # scene (bench/liggghts/pour_multisphere.toml: two-sphere clumps of 2 mm poured into a
 # 0.1 x 0.1 x 0.2 m box, Hertz-Mindlin, dt = 1e-5 s) and the same scene with the seed's 36-sphere
 # cylinders (shapes/cylinder_36.toml). Prints the wall-clock seconds of `kiln run` with one and two
