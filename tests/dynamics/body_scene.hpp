@@ -1,8 +1,8 @@
 #pragma once
 // Helpers shared by the tests of bodies in the step loop (test_bodies, test_polyhedra,
 // test_body_rolling): templates by name, a one-material scene, a plane or mesh floor, placed
-// bodies, a face-down polyhedron, and the momenta the invariants are checked on. World frame
-// throughout.
+// bodies, a face-down polyhedron, the momenta the invariants are checked on, and the comparison
+// of two runs bit for bit. World frame throughout.
 
 #include "common/wall_box.hpp"
 #include "dynamics/system.hpp"
@@ -11,7 +11,9 @@
 #include "geometry/shape.hpp"
 #include "io/shape_reader.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <gtest/gtest.h>
 #include <memory>
 #include <numbers>
 #include <string>
@@ -76,6 +78,34 @@ inline ParticleSpec body(int shape_index, const Vec3& x, const Vec3& v = Vec3::Z
     p.omega = omega;
     p.orientation.fixed = q;
     return p;
+}
+
+/// Positions, velocities, orientations and angular momenta of two runs agree bit for bit.
+inline void expect_same_bits(const ParticleStore& p, const ParticleStore& q) {
+    ASSERT_EQ(p.size(), q.size());
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        EXPECT_EQ(p.x[i], q.x[i]); // exact equality is the point
+        EXPECT_EQ(p.v[i], q.v[i]);
+        EXPECT_EQ(p.q[i].coeffs(), q.q[i].coeffs());
+        EXPECT_EQ(p.ang_mom[i], q.ang_mom[i]);
+    }
+}
+
+/// The element contacts of the last force evaluation of two runs (keys, histories, forces) agree
+/// bit for bit; returns their number.
+inline std::size_t expect_same_records(const System& a, const System& b) {
+    const auto& ra = a.body_contacts();
+    const auto& rb = b.body_contacts();
+    EXPECT_EQ(ra.size(), rb.size());
+    for (std::size_t k = 0; k < std::min(ra.size(), rb.size()); ++k) {
+        EXPECT_EQ(ra[k].key.a, rb[k].key.a);
+        EXPECT_EQ(ra[k].key.b, rb[k].key.b);
+        EXPECT_EQ(ra[k].key.ea, rb[k].key.ea);
+        EXPECT_EQ(ra[k].key.eb, rb[k].key.eb);
+        EXPECT_EQ(ra[k].contact.shear, rb[k].contact.shear);
+        EXPECT_EQ(ra[k].contact.force, rb[k].contact.force);
+    }
+    return rb.size();
 }
 
 /// Total linear momentum (kg m/s).

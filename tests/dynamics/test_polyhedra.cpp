@@ -512,17 +512,6 @@ void step_both(System& with, System& without, int steps, long& contacts) {
     }
 }
 
-/// Positions, velocities, orientations and angular momenta of two runs agree bit for bit.
-void expect_same_bits(const ParticleStore& p, const ParticleStore& q) {
-    ASSERT_EQ(p.size(), q.size());
-    for (std::size_t i = 0; i < p.size(); ++i) {
-        EXPECT_EQ(p.x[i], q.x[i]); // exact equality is the point
-        EXPECT_EQ(p.v[i], q.v[i]);
-        EXPECT_EQ(p.q[i].coeffs(), q.q[i].coeffs());
-        EXPECT_EQ(p.ang_mom[i], q.ang_mom[i]);
-    }
-}
-
 TEST(Polyhedra, SeparationCacheChangesNoBit) {
     // The separating direction kept per list entry (and the portal search of superquadric near
     // misses) only skips queries whose answer is "apart": a pour with it and one without give the
@@ -535,7 +524,7 @@ TEST(Polyhedra, SeparationCacheChangesNoBit) {
     EXPECT_GT(contacts, 20000);
     EXPECT_GT(with.separation_skips(), 100000);
     EXPECT_EQ(without.separation_skips(), 0);
-    expect_same_bits(with.particles(), without.particles());
+    test::expect_same_bits(with.particles(), without.particles());
     std::printf("%ld contacts, %ld of %ld convex queries answered by a separating direction\n",
                 contacts, with.separation_skips(), with.narrow_phase_counters().calls);
 }
@@ -566,7 +555,7 @@ TEST(Polyhedra, OneAndTwoThreadsGiveTheSameBits) {
     long contacts = 0;
     ASSERT_NO_FATAL_FAILURE(step_both(two, one, 18000, contacts));
     EXPECT_GT(contacts, 20000);
-    expect_same_bits(one.particles(), two.particles());
+    test::expect_same_bits(one.particles(), two.particles());
     EXPECT_EQ(one.counters().wall_contacts, two.counters().wall_contacts);
     EXPECT_EQ(one.narrow_phase_counters().calls, two.narrow_phase_counters().calls);
     EXPECT_EQ(one.narrow_phase_counters().fallbacks, two.narrow_phase_counters().fallbacks);
@@ -575,17 +564,9 @@ TEST(Polyhedra, OneAndTwoThreadsGiveTheSameBits) {
     EXPECT_EQ(one.separation_skips(), two.separation_skips());
     EXPECT_GT(one.separation_skips(), 100000);
     // The records of the contacts (read by heat and the output) are the same too.
-    const auto& ra = one.body_contacts();
-    const auto& rb = two.body_contacts();
-    ASSERT_EQ(ra.size(), rb.size());
-    for (std::size_t k = 0; k < ra.size(); ++k) {
-        EXPECT_EQ(ra[k].key.a, rb[k].key.a);
-        EXPECT_EQ(ra[k].key.b, rb[k].key.b);
-        EXPECT_EQ(ra[k].contact.shear, rb[k].contact.shear);
-        EXPECT_EQ(ra[k].contact.force, rb[k].contact.force);
-    }
+    const std::size_t records = test::expect_same_records(one, two);
     std::printf("%ld contacts, %ld narrow-phase queries, %zu contacts at the end\n", contacts,
-                two.narrow_phase_counters().calls, rb.size());
+                two.narrow_phase_counters().calls, records);
 }
 
 TEST(Polyhedra, PlaneMemoChangesNoBit) {
@@ -601,7 +582,7 @@ TEST(Polyhedra, PlaneMemoChangesNoBit) {
     const long answered = kiln::geometry::plane_memo_counters().answered - answered0;
     EXPECT_GT(contacts, 20000);
     EXPECT_GT(answered, 1000);
-    expect_same_bits(with.particles(), without.particles());
+    test::expect_same_bits(with.particles(), without.particles());
     std::printf("%ld contacts, %ld polyhedron queries answered by the memory\n", contacts,
                 answered);
 }
