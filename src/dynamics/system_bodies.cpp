@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <numeric>
 #include <stdexcept>
@@ -439,8 +440,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
     if (elements_.size() < n_elements) {
         elements_.resize(n_elements);
     }
-    std::size_t n_convex = 0; // particles of one convex element (polyhedron, superquadric)
-    bool unexpected = false;  // a particle that is not a clump posed as several elements
+    std::size_t n_convex = 0;        // particles of one convex element (polyhedron, superquadric)
+    bool unexpected = false;         // a particle that is not a clump posed as several elements
+    std::exception_ptr posing_error; // the first exception of the posing, if any
     const auto n_particles = static_cast<std::ptrdiff_t>(p_.size());
 #pragma omp parallel for num_threads(threads_) schedule(static, 64)                               \
     reduction(+ : n_convex) reduction(|| : unexpected) if (threads_ > 1 &&                         \
@@ -466,7 +468,15 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 : nullptr;
         thread_local std::vector<Element> pose_buf; // scratch of posing one particle
         pose_buf.clear();
-        append_elements(t, features, p_.x[i], p_.q[i], rot_[i], p_.radius[i], pose_buf);
+        try { // an exception may not leave a parallel region: it is thrown after the loop
+            append_elements(t, features, p_.x[i], p_.q[i], rot_[i], p_.radius[i], pose_buf);
+        } catch (...) {
+#pragma omp critical(kiln_posing_error)
+            if (!posing_error) {
+                posing_error = std::current_exception();
+            }
+            continue;
+        }
         if (pose_buf.size() != 1) {
             unexpected = true;
             continue;
@@ -478,6 +488,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             elements_[e0] = E;
             ++n_convex;
         }
+    }
+    if (posing_error) {
+        std::rethrow_exception(posing_error);
     }
     if (unexpected) {
         throw std::logic_error("body_forces: a particle that is not a clump has one element");
