@@ -507,11 +507,12 @@ class System {
     std::vector<AheadPair> ahead_;
     // The law's answers for the clump member pairs of one block of the sphere queue (16 lanes),
     // found ahead of the serial pass on several threads (body_forces): what the serial pass's
-    // flush reads to add the forces in its order, and the onset's data when it records onsets.
+    // flush reads to add the forces in its order, and the onset's data when it records onsets
+    // (the pairs' histories are written ahead, to member_shear_ and member_force_).
     struct MemberBlock {
         static constexpr std::size_t lanes = 16;
         double f[3][lanes], ra[3][lanes], rb[3][lanes], ti[3][lanes], tj[3][lanes];
-        double s[3][lanes], energy[lanes], ratio[lanes];
+        double energy[lanes], ratio[lanes];
         double n[3][lanes], p[3][lanes], v[3][lanes], m_eff[lanes], r_eff[lanes]; // onsets
         bool is_new[lanes];
     };

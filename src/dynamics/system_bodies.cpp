@@ -724,7 +724,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 const Rows rb_q = pre != nullptr ? pre->rb : lanes.rb;
                 const Rows ti_q = pre != nullptr ? pre->ti : cb.ti;
                 const Rows tj_q = pre != nullptr ? pre->tj : cb.tj;
-                const Rows s_q = pre != nullptr ? pre->s : cb.s;
                 const Rows n_q = pre != nullptr ? pre->n : cb.n;
                 const Rows p_q = pre != nullptr ? pre->p : lanes.p;
                 const Rows v_q = pre != nullptr ? pre->v : cb.v;
@@ -747,8 +746,10 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     }
                     if (raw_pairs && (q_slot[q] & member_slot) != 0) { // a member pair
                         const std::uint32_t i = q_slot[q] & ~member_slot;
-                        member_shear_[i] = Vec3(s_q[0][q], s_q[1][q], s_q[2][q]);
-                        member_force_[i] = f;
+                        if (pre == nullptr) { // else written ahead
+                            member_shear_[i] = Vec3(cb.s[0][q], cb.s[1][q], cb.s[2][q]);
+                            member_force_[i] = f;
+                        }
                         if (record_body_onsets_ && new_q[q]) { // heat: impact onset
                             note_body_onset(member_keys_[i], Vec3(n_q[0][q], n_q[1][q], n_q[2][q]),
                                             Vec3(p_q[0][q], p_q[1][q], p_q[2][q]),
@@ -1378,6 +1379,14 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         fill_lane(own, q, m.a, m.b, member_c_[m.ea], member_c_[m.eb], shear, r0);
                     }
                     evaluate_sphere_lanes(law, fn_floor, rolling, dt, own, count, true);
+                    // The pairs' own histories here (each pair is in one block only, and its
+                    // old history was read above); the flush adds the forces.
+                    for (std::size_t q = 0; q < count; ++q) {
+                        const std::uint32_t i = member_order_[m0 + q];
+                        member_shear_[i] = Vec3(own.cb.s[0][q], own.cb.s[1][q], own.cb.s[2][q]);
+                        member_force_[i] = Vec3(own.cb.f[0][q], own.cb.f[1][q], own.cb.f[2][q]);
+                        member_seen_[i] = eval;
+                    }
                     MemberBlock& out = member_blocks_[static_cast<std::size_t>(bi)];
                     for (int c = 0; c < 3; ++c) {
                         std::copy_n(own.cb.f[c], count, out.f[c]);
@@ -1385,7 +1394,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         std::copy_n(own.rb[c], count, out.rb[c]);
                         std::copy_n(own.cb.ti[c], count, out.ti[c]);
                         std::copy_n(own.cb.tj[c], count, out.tj[c]);
-                        std::copy_n(own.cb.s[c], count, out.s[c]);
                     }
                     std::copy_n(own.cb.energy, count, out.energy);
                     std::copy_n(own.ratio, count, out.ratio);
@@ -1488,7 +1496,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 }
                 const std::uint32_t i = member_hits_[h];
                 if (members_ahead) { // its law ran ahead: flush() takes the answers
-                    member_seen_[i] = eval;
                     q_a[queued] = m.a;
                     q_b[queued] = m.b;
                     q_slot[queued] = member_slot | i;
