@@ -338,7 +338,7 @@ TEST(Bodies, ClumpBoxGivesTheSameBitsForOneAndTwoThreads) {
     b.use_parallel_bodies(1);
     long contacts = 0;
     long onsets = 0; // impacts recorded (heat's collision conduction reads them)
-    for (int k = 0; k < 10000; ++k) {
+    for (int k = 0; k < 5000; ++k) {
         a.step();
         b.step();
         contacts += a.counters().particle_contacts;
@@ -360,8 +360,8 @@ TEST(Bodies, ClumpBoxGivesTheSameBitsForOneAndTwoThreads) {
         }
         onsets += static_cast<long>(oa.size());
     }
-    EXPECT_GT(contacts, 100000);
-    EXPECT_GT(onsets, 300);
+    EXPECT_GT(contacts, 50000); // or the test proves little
+    EXPECT_GT(onsets, 200);
     test::expect_same_bits(a.particles(), b.particles());
     const std::size_t records = test::expect_same_records(a, b);
     std::printf("%zu particles, %ld contacts and %ld onsets over the run, %zu element contacts at "
