@@ -331,6 +331,10 @@ class System {
     Filter filter_ = Filter::all;
     int threads_ = 1;
     std::size_t parallel_bodies_ = 256; // use_parallel_bodies()
+    /// Do the per-body passes of a step run on several threads (use_parallel_bodies)?
+    [[nodiscard]] bool parallel_body_passes() const {
+        return threads_ > 1 && bodies_.size() >= parallel_bodies_;
+    }
     ContactCounters counters_;
     TimeStepReport ts_;
     std::vector<std::string> warnings_;
@@ -505,6 +509,7 @@ class System {
         std::vector<ElementContact> plan;
     };
     std::vector<AheadPair> ahead_;
+    std::vector<AheadPair> wall_ahead_; // the same for body_walls_ (a is the body, b the wall)
     // The law's answers for the clump member pairs of one block of the sphere queue (16 lanes),
     // found ahead of the serial pass on several threads (body_forces): what the serial pass's
     // flush reads to add the forces in its order, and the onset's data when it records onsets
@@ -519,7 +524,6 @@ class System {
     std::vector<MemberBlock> member_blocks_;
     std::vector<std::uint32_t> member_order_; // the member pairs among the hits, in order
     std::vector<std::size_t> range_counts_;   // body_forces' first pass: hits, skips per range
-    std::vector<AheadPair> wall_ahead_; // the same for body_walls_ (a is the body, b the wall)
     // A body's elements near a plane or cylinder wall (scratch of body_forces' wall pass).
     std::vector<std::uint32_t> wall_hits_;
     std::vector<std::uint32_t> element_begin_; // particle i: [begin[i], begin[i + 1])

@@ -113,7 +113,7 @@ void System::rotate_bodies(int kicks, bool drift) {
     static_assert(run % 8 == 0, "runs of whole batches of the free rotation");
     const std::size_t n = bodies_.size();
     const auto runs = static_cast<std::ptrdiff_t>((n + run - 1) / run);
-    const bool parallel = threads_ > 1 && n >= parallel_bodies_;
+    const bool parallel = parallel_body_passes();
 #pragma omp parallel for num_threads(threads_) schedule(static) if (parallel)
     for (std::ptrdiff_t r = 0; r < runs; ++r) {
         const std::size_t b0 = static_cast<std::size_t>(r) * run;
@@ -445,8 +445,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
     std::exception_ptr posing_error; // the first exception of the posing, if any
     const auto n_particles = static_cast<std::ptrdiff_t>(p_.size());
 #pragma omp parallel for num_threads(threads_) schedule(static, 64)                               \
-    reduction(+ : n_convex) reduction(|| : unexpected) if (threads_ > 1 &&                         \
-                                                           bodies_.size() >= parallel_bodies_)
+    reduction(+ : n_convex) reduction(|| : unexpected) if (parallel_body_passes())
     for (std::ptrdiff_t pi = 0; pi < n_particles; ++pi) {
         const auto i = static_cast<std::size_t>(pi);
         const std::size_t e0 = element_begin_[i];
@@ -599,9 +598,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // (its history goes to member_shear_ and member_force_, no record).
             constexpr std::uint32_t member_slot = 0x80000000U;
             std::uint32_t q_a[block], q_b[block], q_slot[block];
-            bool(&q_new)[block] = lanes.is_new;
-            double(&g_ra)[3][block] = lanes.ra;
-            double(&q_ratio)[block] = lanes.ratio;
             std::size_t queued = 0;
             bool raw_pairs = true; // the queue holds sphere pairs (raw) or wall contacts (posed)
             ChunkTotals* queue_totals = &pair_totals; // where flush() counts the queued contacts
@@ -772,14 +768,14 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         rec.point = Vec3(lanes.p[0][q], lanes.p[1][q], lanes.p[2][q]);
                         rec.overlap = cb.overlap[q];
                         rec.r_eff = cb.r_eff[q];
-                        if (record_body_onsets_ && q_new[q]) { // heat: impact onset (system.cpp)
+                        if (record_body_onsets_ && lanes.is_new[q]) { // heat: impact onset
                             note_body_onset(next_contacts_[q_slot[q]].key, rec.normal, rec.point,
                                             Vec3(cb.v[0][q], cb.v[1][q], cb.v[2][q]), cb.m_eff[q],
                                             rec.r_eff);
                         }
                     }
                     queue_totals->energy += cb.energy[q];
-                    queue_totals->max_ratio = std::max(queue_totals->max_ratio, q_ratio[q]);
+                    queue_totals->max_ratio = std::max(queue_totals->max_ratio, lanes.ratio[q]);
                     ++queue_totals->contacts;
                 }
                 queued = 0;
@@ -800,7 +796,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     cb.wi[c][q] = p_.omega[a][c];
                     cb.wj[c][q] = 0.0;
                     cb.s[c][q] = old != nullptr ? old->shear[c] : 0.0;
-                    g_ra[c][q] = ra[c];
+                    lanes.ra[c][q] = ra[c];
                 }
                 cb.overlap[q] = ec.overlap;
                 cb.r_eff[q] = r_eff;
@@ -811,7 +807,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 cb.set_pair(q, pairs_.at(p_.material[a], material_w));
                 q_a[q] = a;
                 q_b[q] = no_element;
-                q_ratio[q] = ec.overlap / size;
+                lanes.ratio[q] = ec.overlap / size;
                 q_slot[q] = record(
                     key, g,
                     BodyContact{Vec3::Zero(), ec.normal, ec.point, ec.overlap, r_eff, Vec3::Zero()},
@@ -1281,7 +1277,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // per thread, of 256 to 4096 items).
             const std::size_t pass_range = std::clamp<std::size_t>(
                 n_members / (4 * static_cast<std::size_t>(threads_)), 256, 4096);
-            if (threads_ > 1 && bodies_.size() >= parallel_bodies_ && n_members > pass_range) {
+            if (parallel_body_passes() && n_members > pass_range) {
                 const std::size_t n_ranges = (n_members + pass_range - 1) / pass_range;
                 range_counts_.resize(2 * n_ranges);
                 const auto ranges = static_cast<std::ptrdiff_t>(n_ranges);
@@ -1343,7 +1339,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // the serial pass adds the forces in its order. Each block reads the poses and last
             // step's histories (member_shear_, or the table by a search) and writes only its own
             // MemberBlock.
-            members_ahead = threads_ > 1 && bodies_.size() >= parallel_bodies_;
+            members_ahead = parallel_body_passes();
             next_block = 0;
             if (members_ahead) {
                 member_order_.clear();
