@@ -184,7 +184,7 @@ Vec3 Core::support(const Vec3& d) const {
     return x;
 }
 
-CoreDistance core_distance(const Core& a, const Core& b, double tolerance) {
+CoreDistance core_distance(const Core& a, const Core& b, double tolerance, double beyond) {
     CoreDistance out;
     if (!is_convex(a) && !is_convex(b)) {
         out.a = a.x;
@@ -209,6 +209,11 @@ CoreDistance core_distance(const Core& a, const Core& b, double tolerance) {
         const double vn = v.norm();
         // |v| is an upper bound of the distance, v.w / |v| a lower bound.
         const double lower = v.dot(sp.w) / vn;
+        if (lower > beyond) {
+            out.beyond = true;
+            out.distance = lower;
+            return out;
+        }
         if (simplex.n > 0 && vn - lower <= tolerance) {
             break;
         }
@@ -248,7 +253,8 @@ CoreDistance core_distance(const Core& a, const Core& b, double tolerance) {
     return out;
 }
 
-std::vector<BodyGap> element_gaps(const dynamics::System& sys, std::size_t i, std::size_t j) {
+std::vector<BodyGap> element_gaps(const dynamics::System& sys, std::size_t i, std::size_t j,
+                                  double cutoff) {
     const ParticleStore& p = sys.particles();
     std::vector<Core> ci;
     std::vector<Core> cj;
@@ -261,7 +267,20 @@ std::vector<BodyGap> element_gaps(const dynamics::System& sys, std::size_t i, st
     out.reserve(ci.size() * cj.size());
     for (std::size_t a = 0; a < ci.size(); ++a) {
         for (std::size_t b = 0; b < cj.size(); ++b) {
-            const CoreDistance d = core_distance(ci[a], cj[b], tol);
+            // The largest distance of the cores at which the pair can be kept: both margins and
+            // the reach of the largest equivalent spheres (a sphere element: its radius; a convex
+            // body: its bounding radius, above its volume-equivalent radius and its gas-gap
+            // radius), plus the GJK tolerance against the support maps' round-off.
+            double beyond = std::numeric_limits<double>::infinity();
+            if (std::isfinite(cutoff)) {
+                const double r_a = is_convex(ci[a]) ? p.radius[i] : mi[a];
+                const double r_b = is_convex(cj[b]) ? p.radius[j] : mj[b];
+                beyond = mi[a] + mj[b] + 2.0 * cutoff * (2.0 * r_a * r_b) / (r_a + r_b) + tol;
+            }
+            const CoreDistance d = core_distance(ci[a], cj[b], tol, beyond);
+            if (d.beyond || (!d.overlap && d.distance > beyond)) {
+                continue;
+            }
             BodyGap g;
             g.member_radius_i = is_convex(ci[a]) ? 0.0 : mi[a];
             g.member_radius_j = is_convex(cj[b]) ? 0.0 : mj[b];

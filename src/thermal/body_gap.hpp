@@ -16,6 +16,7 @@
 #include "geometry/superquadric.hpp"
 
 #include <cstddef>
+#include <limits>
 #include <vector>
 
 namespace kiln::thermal {
@@ -35,8 +36,16 @@ struct BodyGap {
 /// Gap and nearest points of every pair of elements (cores) of particles index `i` and `j` of
 /// `sys`: one for two convex bodies or spheres, one per member (pair) for clumps; in element
 /// order (i's elements outer). Overlapping convex cores as in body_gap.
-[[nodiscard]] std::vector<BodyGap> element_gaps(const dynamics::System& sys, std::size_t i,
-                                                std::size_t j);
+///
+/// `cutoff` (-, default: none) leaves out the element pairs whose gap is proved larger than
+/// 2 cutoff R, R = 2 R_i R_j / (R_i + R_j), with R_i a sphere element's radius or a convex body's
+/// bounding radius: the gas-gap reach (heat/gas_conduction.hpp) of the largest spheres an element
+/// can stand for, so no pair within the reach of its equivalent spheres is left out. Their GJK
+/// stops as soon as its lower bound of the distance passes that reach; the pairs kept are the same
+/// numbers either way.
+[[nodiscard]] std::vector<BodyGap>
+element_gaps(const dynamics::System& sys, std::size_t i, std::size_t j,
+             double cutoff = std::numeric_limits<double>::infinity());
 
 /// Gap and nearest points of particles index `i` and `j` of `sys` (any shapes): the element pair
 /// of smallest gap. Cores that
@@ -77,11 +86,16 @@ struct CoreDistance {
     Vec3 b = Vec3::Zero(); ///< nearest point of core B (m, world)
     bool overlap = false;  ///< the cores overlap (a, b then undefined)
     bool converged = true; ///< false: the iteration cap was hit
+    bool beyond = false;   ///< stopped when the distance was proved larger than `beyond` (then
+                           ///< `distance` is that lower bound and a, b are undefined)
     int iterations = 0;    ///< GJK iterations (-)
 };
 
 /// Distance and nearest points of cores `a` and `b` by GJK, to the absolute tolerance
-/// `tolerance` (m) on the distance.
-[[nodiscard]] CoreDistance core_distance(const Core& a, const Core& b, double tolerance);
+/// `tolerance` (m) on the distance. With `beyond` (m) finite, GJK stops as soon as its lower
+/// bound of the distance exceeds `beyond` (for callers that drop such pairs); otherwise the
+/// iterations and the answer are the same.
+[[nodiscard]] CoreDistance core_distance(const Core& a, const Core& b, double tolerance,
+                                         double beyond = std::numeric_limits<double>::infinity());
 
 } // namespace kiln::thermal

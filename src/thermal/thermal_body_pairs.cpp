@@ -83,7 +83,9 @@ void ThermalSystem::body_gas_gaps(const dynamics::System& sys, std::size_t i, st
     const double k_b = spec_.materials[static_cast<std::size_t>(base.b.material)].conductivity;
     // Every element pair on its own, as contacts: a clump's members are spheres, so two clumps
     // exchange through each member pair within the cut-off.
-    for (const BodyGap& g : element_gaps(sys, i, j)) {
+    // (Element pairs proved beyond the reach of their largest equivalent spheres are left out:
+    // the test below drops them.)
+    for (const BodyGap& g : element_gaps(sys, i, j, spec_.gas.cutoff)) {
         // The radius of each side in the Cheng et al. formula: a sphere's own; a clump member's
         // (its exact local shape); a superquadric's local radius of curvature at the nearest
         // point; a polyhedron's volume-equivalent sphere (an approximation: a flat face has no

@@ -154,6 +154,86 @@ TEST(BodyGaps, OverlappingConvexCoresGiveGapZeroAlongTheCentres) {
     EXPECT_NEAR(bg.normal.x(), 1.0, 1e-12);
 }
 
+/// Are two gaps the same bits (gap, points, normal, radii, convergence)?
+bool same_gap(const BodyGap& x, const BodyGap& y) {
+    return x.gap == y.gap && x.point_i == y.point_i && x.point_j == y.point_j &&
+           x.normal == y.normal && x.member_radius_i == y.member_radius_i &&
+           x.member_radius_j == y.member_radius_j && x.converged == y.converged;
+}
+
+TEST(BodyGaps, ElementGapsWithACutoffLeaveOutOnlyPairsBeyondTheReach) {
+    // Cubes, 1:2:3 ellipsoids, dumbbells and spheres at random poses and distances up to a few
+    // sizes: with a cut-off, element_gaps must give the pairs of the full call in order, the
+    // same bits, leaving out only pairs whose gap exceeds the gas-gap reach 2 cutoff R of their
+    // largest equivalent spheres (a member's radius, a body's bounding radius).
+    const double a = 1.5e-3;
+    dynamics::SceneSpec s =
+        scene({test::cube_template(a), ellipsoid(Vec3(1e-3, 2e-3, 3e-3)), dumbbell(1e-3)});
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const int kinds[] = {0, 1, 2, -1};
+    for (int k = 0; k < 40; ++k) {
+        const int shape = kinds[k % 4];
+        const Vec3 x(u(rng), u(rng), u(rng));
+        const Quat q = Quat(Eigen::Vector4d(u(rng), u(rng), u(rng), u(rng))).normalized();
+        s.particles.push_back(at(shape, 1.2e-3, 6e-3 * x, q));
+    }
+    const dynamics::System sys(s);
+    const ParticleStore& p = sys.particles();
+    const double cutoff = 0.5;
+    long kept = 0;
+    long left_out = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        for (std::size_t j = i + 1; j < p.size(); ++j) {
+            const std::vector<BodyGap> all = element_gaps(sys, i, j);
+            const std::vector<BodyGap> cut = element_gaps(sys, i, j, cutoff);
+            std::size_t next = 0;
+            for (const BodyGap& g : all) {
+                if (next < cut.size() && same_gap(g, cut[next])) {
+                    ++next;
+                    ++kept;
+                    continue;
+                }
+                ++left_out;
+                const double r_i = g.member_radius_i > 0.0 ? g.member_radius_i : p.radius[i];
+                const double r_j = g.member_radius_j > 0.0 ? g.member_radius_j : p.radius[j];
+                EXPECT_GT(g.gap, 2.0 * cutoff * (2.0 * r_i * r_j) / (r_i + r_j))
+                    << "pair " << i << ", " << j << " left out within the reach";
+            }
+            EXPECT_EQ(next, cut.size()) << "pair " << i << ", " << j << ": an entry not in order";
+        }
+    }
+    EXPECT_GT(kept, 50);      // the scene has pairs within reach ...
+    EXPECT_GT(left_out, 500); // ... and many beyond it
+}
+
+TEST(BodyGaps, GjkStopsOnceTheGapIsProvedBeyondTheBound) {
+    const geometry::ShapeTemplate t = ellipsoid(Vec3(1e-3, 2e-3, 3e-3));
+    const auto& sq = std::get<geometry::Superquadric>(t.shape);
+    Core a;
+    a.superquadric = &sq;
+    Core b = a;
+    b.x = Vec3(9e-3, 1e-3, 0.5e-3);
+    b.q = Quat(Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()));
+    const double tol = 3e-12;
+    const CoreDistance full = core_distance(a, b, tol);
+    ASSERT_TRUE(full.converged);
+    ASSERT_FALSE(full.beyond);
+    // A bound well below the distance: stopped early, with a lower bound above the bound.
+    const CoreDistance early = core_distance(a, b, tol, 0.5 * full.distance);
+    EXPECT_TRUE(early.beyond);
+    EXPECT_LT(early.iterations, full.iterations);
+    EXPECT_GT(early.distance, 0.5 * full.distance);
+    EXPECT_LE(early.distance, full.distance + tol);
+    // A bound above the distance: the same iterations and answer as without one.
+    const CoreDistance same = core_distance(a, b, tol, 2.0 * full.distance);
+    EXPECT_FALSE(same.beyond);
+    EXPECT_EQ(same.iterations, full.iterations);
+    EXPECT_EQ(same.distance, full.distance);
+    EXPECT_EQ(same.a, full.a);
+    EXPECT_EQ(same.b, full.b);
+}
+
 /// Value of a counter `"key": N` in summary_json.
 long summary_count(const ThermalSystem& heat, const std::string& key) {
     const std::string j = heat.summary_json();
