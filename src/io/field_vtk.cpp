@@ -122,6 +122,7 @@ void FieldSeriesWriter::write(const dynamics::System& sys, const thermal::Therma
     w->SetDataModeToAppended();
     w->EncodeAppendedDataOff();
     w->SetCompressorTypeToZLib();
+    w->SetCompressionLevel(1); // the fastest, as vtk_writer.cpp's files (see there)
     w->SetHeaderTypeToUInt64();
     if (w->Write() != 1) {
         throw InputError((dir_ / name).string(), 0, "", "cannot write the VTK field file");

@@ -42,7 +42,10 @@ constexpr double region_growth = 1.2;
 /// Edge length of the region drawn when the scene has neither particles nor insert blocks (m).
 constexpr double default_region_size = 1.0;
 
-/// Writes `pd` to `file` as appended raw binary, zlib-compressed VTK XML polydata.
+/// Writes `pd` to `file` as appended raw binary, zlib-compressed VTK XML polydata. Level 1, the
+/// fastest: the arrays are doubles, whose mantissas deflate barely shrinks at any level (the
+/// showcase's output is 74 MB at VTK's default level and at level 1), and the default level's
+/// compression was 12 % of the showcase's run time (docs/performance.md, "Session 23").
 void write_polydata(vtkPolyData* pd, const std::filesystem::path& file) {
     vtkNew<vtkXMLPolyDataWriter> w;
     w->SetFileName(file.string().c_str());
@@ -50,6 +53,7 @@ void write_polydata(vtkPolyData* pd, const std::filesystem::path& file) {
     w->SetDataModeToAppended();
     w->EncodeAppendedDataOff();
     w->SetCompressorTypeToZLib();
+    w->SetCompressionLevel(1);
     w->SetHeaderTypeToUInt64();
     if (w->Write() != 1) {
         throw InputError(file.string(), 0, "", "cannot write the VTK file");
