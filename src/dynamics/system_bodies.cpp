@@ -308,18 +308,20 @@ void System::build_member_pairs() {
         }
         return true;
     };
-    std::vector<std::uint32_t> near_a;
-    std::vector<std::uint32_t> near_b;
-    for (const std::uint32_t k : body_entries_) {
+    // The member pairs of list entry k, appended to `pairs` and `keys` (near_a, near_b: scratch).
+    const auto entry_pairs = [&](std::uint32_t k, std::vector<MemberPair>& pairs,
+                                 std::vector<BodyContactKey>& keys,
+                                 std::vector<std::uint32_t>& near_a,
+                                 std::vector<std::uint32_t>& near_b) {
         std::uint32_t a = owner[k];
         std::uint32_t b = nb[k];
         if (p_.id[a] > p_.id[b]) {
             std::swap(a, b);
         }
         if (!all_spheres(a) || !all_spheres(b)) {
-            member_pairs_.push_back({k, a, b, no_element, no_element});
-            member_keys_.push_back({p_.id[a], p_.id[b], -1, -1});
-            continue;
+            pairs.push_back({k, a, b, no_element, no_element});
+            keys.push_back({p_.id[a], p_.id[b], -1, -1});
+            return;
         }
         // Members of each side that can reach the other body at all: a member pair within the
         // skin has |A - x_b| < r_A + skin + R_b (R_b: b's bounding radius, which covers every
@@ -343,7 +345,7 @@ void System::build_member_pairs() {
         if (na * nb_e > 2 * (na + nb_e)) { // the pre-selection pays (not for dimers: 4 vs 8)
             near_members(a, b, near_a);
             if (near_a.empty()) {
-                continue;
+                return;
             }
             near_members(b, a, near_b);
         } else {
@@ -358,12 +360,51 @@ void System::build_member_pairs() {
                 const MemberSphere& B = member_c_[eb];
                 const double reach = A.r + B.r + skin;
                 if ((Vec3(A.x, A.y, A.z) - Vec3(B.x, B.y, B.z)).squaredNorm() < reach * reach) {
-                    member_pairs_.push_back({k, a, b, ea, eb});
-                    member_keys_.push_back({p_.id[a], p_.id[b],
-                                            static_cast<std::int32_t>(ea - element_begin_[a]),
-                                            static_cast<std::int32_t>(eb - element_begin_[b])});
+                    pairs.push_back({k, a, b, ea, eb});
+                    keys.push_back({p_.id[a], p_.id[b],
+                                    static_cast<std::int32_t>(ea - element_begin_[a]),
+                                    static_cast<std::int32_t>(eb - element_begin_[b])});
                 }
             }
+        }
+    };
+    // With several threads, ranges of entries in parallel, each into its own lists, joined in
+    // range order: the pairs of the serial loop, in its order (whatever the ranges).
+    const std::size_t n_entries = body_entries_.size();
+    const std::size_t range = std::clamp<std::size_t>(
+        n_entries / (4 * static_cast<std::size_t>(threads_)), 64, 1024);
+    const bool parallel = parallel_body_passes() && n_entries > range;
+    if (!parallel) {
+        std::vector<std::uint32_t> near_a;
+        std::vector<std::uint32_t> near_b;
+        for (const std::uint32_t k : body_entries_) {
+            entry_pairs(k, member_pairs_, member_keys_, near_a, near_b);
+        }
+    } else {
+        const std::size_t n_ranges = (n_entries + range - 1) / range;
+        range_pairs_.resize(n_ranges);
+        range_keys_.resize(n_ranges);
+        const auto ranges = static_cast<std::ptrdiff_t>(n_ranges);
+#pragma omp parallel num_threads(threads_)
+        {
+            std::vector<std::uint32_t> near_a;
+            std::vector<std::uint32_t> near_b;
+#pragma omp for schedule(static)
+            for (std::ptrdiff_t r = 0; r < ranges; ++r) {
+                const auto ru = static_cast<std::size_t>(r);
+                range_pairs_[ru].clear();
+                range_keys_[ru].clear();
+                const std::size_t end = std::min(n_entries, (ru + 1) * range);
+                for (std::size_t e = ru * range; e < end; ++e) {
+                    entry_pairs(body_entries_[e], range_pairs_[ru], range_keys_[ru], near_a,
+                                near_b);
+                }
+            }
+        }
+        for (std::size_t r = 0; r < n_ranges; ++r) {
+            member_pairs_.insert(member_pairs_.end(), range_pairs_[r].begin(),
+                                 range_pairs_[r].end());
+            member_keys_.insert(member_keys_.end(), range_keys_[r].begin(), range_keys_[r].end());
         }
     }
     // The poses of this build, for body_forces' rebuild test: every element centre, and per
@@ -372,7 +413,10 @@ void System::build_member_pairs() {
     body_x_build_.assign(p_.x.begin(), p_.x.end());
     body_rot_build_.assign(rot_.begin(), rot_.end());
     member_reach_.assign(p_.size(), 0.0);
-    for (std::size_t i = 0; i < p_.size(); ++i) {
+    const auto n_particles = static_cast<std::ptrdiff_t>(p_.size());
+#pragma omp parallel for num_threads(threads_) schedule(static) if (parallel)
+    for (std::ptrdiff_t ii = 0; ii < n_particles; ++ii) {
+        const auto i = static_cast<std::size_t>(ii);
         double far2 = 0.0;
         for (std::uint32_t e = element_begin_[i]; e < element_begin_[i + 1]; ++e) {
             member_x_build_[e] = Vec3(member_c_[e].x, member_c_[e].y, member_c_[e].z);
