@@ -309,70 +309,69 @@ void System::build_member_pairs() {
         return true;
     };
     // The member pairs of list entry k, appended to `pairs` and `keys` (near_a, near_b: scratch).
-    const auto entry_pairs = [&](std::uint32_t k, std::vector<MemberPair>& pairs,
-                                 std::vector<BodyContactKey>& keys,
-                                 std::vector<std::uint32_t>& near_a,
-                                 std::vector<std::uint32_t>& near_b) {
-        std::uint32_t a = owner[k];
-        std::uint32_t b = nb[k];
-        if (p_.id[a] > p_.id[b]) {
-            std::swap(a, b);
-        }
-        if (!all_spheres(a) || !all_spheres(b)) {
-            pairs.push_back({k, a, b, no_element, no_element});
-            keys.push_back({p_.id[a], p_.id[b], -1, -1});
-            return;
-        }
-        // Members of each side that can reach the other body at all: a member pair within the
-        // skin has |A - x_b| < r_A + skin + R_b (R_b: b's bounding radius, which covers every
-        // member's sphere), so members beyond that (widened by 1e-9 against round-off) pair with
-        // nothing. The pairs are those of the full double loop, in its order.
-        const auto near_members = [&](std::uint32_t i, std::uint32_t other,
-                                      std::vector<std::uint32_t>& out) {
-            out.clear();
-            const Vec3& xo = p_.x[other];
-            const double ro = p_.radius[other] + skin;
-            for (std::uint32_t e = element_begin_[i]; e < element_begin_[i + 1]; ++e) {
-                const MemberSphere& m = member_c_[e];
-                const double reach = (m.r + ro) * (1.0 + 1e-9);
-                if ((Vec3(m.x, m.y, m.z) - xo).squaredNorm() < reach * reach) {
-                    out.push_back(e);
+    const auto entry_pairs =
+        [&](std::uint32_t k, std::vector<MemberPair>& pairs, std::vector<BodyContactKey>& keys,
+            std::vector<std::uint32_t>& near_a, std::vector<std::uint32_t>& near_b) {
+            std::uint32_t a = owner[k];
+            std::uint32_t b = nb[k];
+            if (p_.id[a] > p_.id[b]) {
+                std::swap(a, b);
+            }
+            if (!all_spheres(a) || !all_spheres(b)) {
+                pairs.push_back({k, a, b, no_element, no_element});
+                keys.push_back({p_.id[a], p_.id[b], -1, -1});
+                return;
+            }
+            // Members of each side that can reach the other body at all: a member pair within the
+            // skin has |A - x_b| < r_A + skin + R_b (R_b: b's bounding radius, which covers every
+            // member's sphere), so members beyond that (widened by 1e-9 against round-off) pair
+            // with nothing. The pairs are those of the full double loop, in its order.
+            const auto near_members = [&](std::uint32_t i, std::uint32_t other,
+                                          std::vector<std::uint32_t>& out) {
+                out.clear();
+                const Vec3& xo = p_.x[other];
+                const double ro = p_.radius[other] + skin;
+                for (std::uint32_t e = element_begin_[i]; e < element_begin_[i + 1]; ++e) {
+                    const MemberSphere& m = member_c_[e];
+                    const double reach = (m.r + ro) * (1.0 + 1e-9);
+                    if ((Vec3(m.x, m.y, m.z) - xo).squaredNorm() < reach * reach) {
+                        out.push_back(e);
+                    }
+                }
+            };
+            const std::uint32_t na = element_begin_[a + 1] - element_begin_[a];
+            const std::uint32_t nb_e = element_begin_[b + 1] - element_begin_[b];
+            if (na * nb_e > 2 * (na + nb_e)) { // the pre-selection pays (not for dimers: 4 vs 8)
+                near_members(a, b, near_a);
+                if (near_a.empty()) {
+                    return;
+                }
+                near_members(b, a, near_b);
+            } else {
+                near_a.resize(na);
+                std::iota(near_a.begin(), near_a.end(), element_begin_[a]);
+                near_b.resize(nb_e);
+                std::iota(near_b.begin(), near_b.end(), element_begin_[b]);
+            }
+            for (const std::uint32_t ea : near_a) {
+                for (const std::uint32_t eb : near_b) {
+                    const MemberSphere& A = member_c_[ea];
+                    const MemberSphere& B = member_c_[eb];
+                    const double reach = A.r + B.r + skin;
+                    if ((Vec3(A.x, A.y, A.z) - Vec3(B.x, B.y, B.z)).squaredNorm() < reach * reach) {
+                        pairs.push_back({k, a, b, ea, eb});
+                        keys.push_back({p_.id[a], p_.id[b],
+                                        static_cast<std::int32_t>(ea - element_begin_[a]),
+                                        static_cast<std::int32_t>(eb - element_begin_[b])});
+                    }
                 }
             }
         };
-        const std::uint32_t na = element_begin_[a + 1] - element_begin_[a];
-        const std::uint32_t nb_e = element_begin_[b + 1] - element_begin_[b];
-        if (na * nb_e > 2 * (na + nb_e)) { // the pre-selection pays (not for dimers: 4 vs 8)
-            near_members(a, b, near_a);
-            if (near_a.empty()) {
-                return;
-            }
-            near_members(b, a, near_b);
-        } else {
-            near_a.resize(na);
-            std::iota(near_a.begin(), near_a.end(), element_begin_[a]);
-            near_b.resize(nb_e);
-            std::iota(near_b.begin(), near_b.end(), element_begin_[b]);
-        }
-        for (const std::uint32_t ea : near_a) {
-            for (const std::uint32_t eb : near_b) {
-                const MemberSphere& A = member_c_[ea];
-                const MemberSphere& B = member_c_[eb];
-                const double reach = A.r + B.r + skin;
-                if ((Vec3(A.x, A.y, A.z) - Vec3(B.x, B.y, B.z)).squaredNorm() < reach * reach) {
-                    pairs.push_back({k, a, b, ea, eb});
-                    keys.push_back({p_.id[a], p_.id[b],
-                                    static_cast<std::int32_t>(ea - element_begin_[a]),
-                                    static_cast<std::int32_t>(eb - element_begin_[b])});
-                }
-            }
-        }
-    };
     // With several threads, ranges of entries in parallel, each into its own lists, joined in
     // range order: the pairs of the serial loop, in its order (whatever the ranges).
     const std::size_t n_entries = body_entries_.size();
-    const std::size_t range = std::clamp<std::size_t>(
-        n_entries / (4 * static_cast<std::size_t>(threads_)), 64, 1024);
+    const std::size_t range =
+        std::clamp<std::size_t>(n_entries / (4 * static_cast<std::size_t>(threads_)), 64, 1024);
     const bool parallel = parallel_body_passes() && n_entries > range;
     if (!parallel) {
         std::vector<std::uint32_t> near_a;
