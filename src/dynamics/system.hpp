@@ -362,6 +362,7 @@ class System {
     // build_member_pairs on several threads: each range of entries' pairs and keys (scratch).
     std::vector<std::vector<MemberPair>> range_pairs_;
     std::vector<std::vector<BodyContactKey>> range_keys_;
+    std::vector<std::size_t> range_offsets_; // where each range's pairs go in member_pairs_
     // Per list entry of two single convex elements (polyhedra, superquadrics): a direction (unit,
     // from b's element to a's, a the particle with the smaller id, world frame) that separated them
     // at an earlier step, or zero; reset at every list build and restart (element_contact's

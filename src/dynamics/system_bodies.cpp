@@ -371,7 +371,7 @@ void System::build_member_pairs() {
     // range order: the pairs of the serial loop, in its order (whatever the ranges).
     const std::size_t n_entries = body_entries_.size();
     const std::size_t range =
-        std::clamp<std::size_t>(n_entries / (4 * static_cast<std::size_t>(threads_)), 64, 1024);
+        std::clamp<std::size_t>(n_entries / (8 * static_cast<std::size_t>(threads_)), 64, 1024);
     const bool parallel = parallel_body_passes() && n_entries > range;
     if (!parallel) {
         std::vector<std::uint32_t> near_a;
@@ -383,12 +383,14 @@ void System::build_member_pairs() {
         const std::size_t n_ranges = (n_entries + range - 1) / range;
         range_pairs_.resize(n_ranges);
         range_keys_.resize(n_ranges);
+        range_offsets_.resize(n_ranges + 1);
         const auto ranges = static_cast<std::ptrdiff_t>(n_ranges);
 #pragma omp parallel num_threads(threads_)
         {
             std::vector<std::uint32_t> near_a;
             std::vector<std::uint32_t> near_b;
-#pragma omp for schedule(static)
+            // Ranges of clumps at a wall or deep in a bed differ in work: taken one by one.
+#pragma omp for schedule(dynamic, 1)
             for (std::ptrdiff_t r = 0; r < ranges; ++r) {
                 const auto ru = static_cast<std::size_t>(r);
                 range_pairs_[ru].clear();
@@ -399,11 +401,25 @@ void System::build_member_pairs() {
                                 near_b);
                 }
             }
-        }
-        for (std::size_t r = 0; r < n_ranges; ++r) {
-            member_pairs_.insert(member_pairs_.end(), range_pairs_[r].begin(),
-                                 range_pairs_[r].end());
-            member_keys_.insert(member_keys_.end(), range_keys_[r].begin(), range_keys_[r].end());
+            // Joined in range order, each range copied to its place in parallel.
+#pragma omp single
+            {
+                range_offsets_[0] = 0;
+                for (std::size_t r = 0; r < n_ranges; ++r) {
+                    range_offsets_[r + 1] = range_offsets_[r] + range_pairs_[r].size();
+                }
+                member_pairs_.resize(range_offsets_[n_ranges]);
+                member_keys_.resize(range_offsets_[n_ranges]);
+            }
+#pragma omp for schedule(static)
+            for (std::ptrdiff_t r = 0; r < ranges; ++r) {
+                const auto ru = static_cast<std::size_t>(r);
+                const auto at = static_cast<std::ptrdiff_t>(range_offsets_[ru]);
+                std::copy(range_pairs_[ru].begin(), range_pairs_[ru].end(),
+                          member_pairs_.begin() + at);
+                std::copy(range_keys_[ru].begin(), range_keys_[ru].end(),
+                          member_keys_.begin() + at);
+            }
         }
     }
     // The poses of this build, for body_forces' rebuild test: every element centre, and per
@@ -423,9 +439,19 @@ void System::build_member_pairs() {
         }
         member_reach_[i] = std::sqrt(far2);
     }
-    member_shear_.assign(member_pairs_.size(), Vec3::Zero());
-    member_force_.assign(member_pairs_.size(), Vec3::Zero());
-    member_seen_.assign(member_pairs_.size(), -1);
+    // The pairs' histories start empty (in parallel: millions of entries in a large bed).
+    const std::size_t n_pairs = member_pairs_.size();
+    member_shear_.resize(n_pairs);
+    member_force_.resize(n_pairs);
+    member_seen_.resize(n_pairs);
+    const auto n_pairs_s = static_cast<std::ptrdiff_t>(n_pairs);
+#pragma omp parallel for num_threads(threads_) schedule(static) if (parallel)
+    for (std::ptrdiff_t k = 0; k < n_pairs_s; ++k) {
+        const auto ku = static_cast<std::size_t>(k);
+        member_shear_[ku] = Vec3::Zero();
+        member_force_[ku] = Vec3::Zero();
+        member_seen_[ku] = -1;
+    }
     members_valid_ = true;
 }
 
