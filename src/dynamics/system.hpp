@@ -530,6 +530,16 @@ class System {
     std::vector<std::size_t> range_counts_;   // body_forces' first pass: hits, skips per range
     // A body's elements near a plane or cylinder wall (scratch of body_forces' wall pass).
     std::vector<std::uint32_t> wall_hits_;
+    // The contacts of a clump's sphere elements with one wall (body_forces' wall pass): the
+    // element's index in the body and the contact; per candidate of body_walls_ when found ahead
+    // on several threads (ready: found), and the serial pass's own.
+    struct MemberWallContact {
+        std::uint32_t j;
+        ElementContact ec;
+    };
+    std::vector<std::vector<MemberWallContact>> clump_wall_ahead_;
+    std::vector<unsigned char> clump_wall_ready_;
+    std::vector<MemberWallContact> one_clump_wall_;
     std::vector<std::uint32_t> element_begin_; // particle i: [begin[i], begin[i + 1])
     // Polyhedron features per template (empty for other shapes), built once in the constructor.
     std::vector<geometry::PolyhedronFeatures> poly_features_;

@@ -13,6 +13,7 @@
 #include <numeric>
 #include <stdexcept>
 #include <utility>
+#include <variant>
 #include <vector>
 
 namespace kiln::dynamics {
@@ -35,6 +36,53 @@ struct SphereLanes {
     double p[3][L], ra[3][L], rb[3][L], ratio[L];
     bool is_new[L]; // the contact is new this step (heat: impact onsets)
 };
+
+/// The contacts of a clump's sphere elements mc[0..n_el) with the wall shape ws, in element order,
+/// into `out` as {element index in the body, contact}: first, from one pass without branches,
+/// every element that is not a sphere and the sphere elements closer to touching than 1e-9 of
+/// their radius (far above the round-off of the overlap; a branch per member was mispredicted
+/// often), then the exact test (`hits`: scratch). Throws for an element that is not a sphere (a
+/// body of several elements is a clump of spheres). One out-of-line instance, called by the
+/// serial pass and by the threads ahead of it, so that both give the same bits.
+template <class Member, class Hit>
+[[gnu::noinline]] void clump_wall_contacts(const WallShape& ws, const Member* mc,
+                                           std::uint32_t n_el, std::vector<std::uint32_t>& hits,
+                                           std::vector<Hit>& out) {
+    out.clear();
+    hits.resize(n_el);
+    std::size_t n_wh = 0;
+    std::visit(
+        [&](const auto& s) {
+            std::uint32_t* h = hits.data();
+            for (std::uint32_t j = 0; j < n_el; ++j) {
+                const double ov = wall_contact(s, Vec3(mc[j].x, mc[j].y, mc[j].z), mc[j].r).overlap;
+                const bool near = !(mc[j].r > 0.0) || ov > -1e-9 * mc[j].r;
+                h[n_wh] = j;
+                n_wh += static_cast<std::size_t>(near);
+            }
+        },
+        ws);
+    for (std::size_t k = 0; k < n_wh; ++k) {
+        const std::uint32_t j = hits[k];
+        const Member& ms = mc[j];
+        if (!(ms.r > 0.0)) {
+            throw std::logic_error("body_forces: a convex element in a body of several elements");
+        }
+        const Vec3 centre(ms.x, ms.y, ms.z);
+        const WallContact wc =
+            std::visit([&](const auto& s) { return wall_contact(s, centre, ms.r); }, ws);
+        if (!(wc.overlap > 0.0)) {
+            continue;
+        }
+        ElementContact ec; // element_wall_contact's sphere case
+        ec.touching = true;
+        ec.overlap = wc.overlap;
+        ec.normal = wc.n;
+        ec.point = centre - (ms.r - 0.5 * wc.overlap) * wc.n;
+        ec.r_eff = wc.r_eff;
+        out.push_back({j, ec});
+    }
+}
 
 /// The first `queued` lanes of `q` through the law (`raw`: sphere pairs, whose geometry is
 /// derived first from the raw data, in vector lanes). One out-of-line instance per law, called by
@@ -1651,29 +1699,64 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 const std::uint32_t a0 = element_begin_[a];
                 return element_begin_[a + 1] - a0 == 1 && !(member_c_[a0].r > 0.0);
             };
-            // With several threads, the wall queries of convex bodies run ahead, in parallel.
+            // The contacts of clump_wall_contacts for body a and wall w, to the law in the
+            // serial order.
+            const auto take_clump_wall = [&](std::uint32_t a, std::uint32_t w,
+                                             const std::vector<MemberWallContact>& hits) {
+                const std::uint32_t a0 = element_begin_[a];
+                for (const MemberWallContact& h : hits) {
+                    const BodyContactKey key{p_.id[a], -1 - static_cast<std::int64_t>(w),
+                                             static_cast<std::int32_t>(h.j), 0};
+                    const ContactGroup g{1, a, w, h.j};
+                    queue_wall(a, 2.0 * member_c_[a0 + h.j].r, h.ec, spec_.walls[w].material, key,
+                               g, find_old(g, key.eb));
+                }
+            };
+            // With several threads, the wall queries of convex bodies run ahead, in parallel, and
+            // so does the geometry of clumps at walls (clump_wall_contacts; the law stays in the
+            // serial pass's queue), with enough bodies (as the other passes of a clump step).
             const std::size_t n_candidates = body_walls_.size();
-            const bool walls_ahead = threads_ > 1 && n_convex > 0 && n_candidates > 1;
+            const bool walls_ahead =
+                threads_ > 1 && (n_convex > 0 || parallel_body_passes()) && n_candidates > 1;
             if (walls_ahead) {
                 wall_ahead_.resize(n_candidates);
+                clump_wall_ahead_.resize(n_candidates);
+                clump_wall_ready_.resize(n_candidates);
                 const auto n_bodies = static_cast<std::ptrdiff_t>(bodies_.size());
-#pragma omp parallel for num_threads(threads_) schedule(dynamic, 16)
-                for (std::ptrdiff_t bi = 0; bi < n_bodies; ++bi) {
-                    const auto i = static_cast<std::size_t>(bi);
-                    const std::uint32_t a = bodies_[i];
-                    const bool convex = convex_body(a);
-                    for (std::uint32_t c = body_wall_offsets_[i]; c < body_wall_offsets_[i + 1];
-                         ++c) {
-                        AheadPair& s = wall_ahead_[c];
-                        s.ready = false;
-                        if (!convex) {
-                            continue;
-                        }
-                        try {
-                            wall_query(c, a, body_walls_[c], old_record, s);
-                            s.ready = true;
-                        } catch (...) {
+#pragma omp parallel num_threads(threads_)
+                {
+                    std::vector<std::uint32_t> hits; // clump_wall_contacts' scratch
+#pragma omp for schedule(dynamic, 16)
+                    for (std::ptrdiff_t bi = 0; bi < n_bodies; ++bi) {
+                        const auto i = static_cast<std::size_t>(bi);
+                        const std::uint32_t a = bodies_[i];
+                        const bool convex = convex_body(a);
+                        for (std::uint32_t c = body_wall_offsets_[i]; c < body_wall_offsets_[i + 1];
+                             ++c) {
+                            AheadPair& s = wall_ahead_[c];
                             s.ready = false;
+                            clump_wall_ready_[c] = 0;
+                            const std::uint32_t w = body_walls_[c];
+                            try {
+                                if (convex) {
+                                    wall_query(c, a, w, old_record, s);
+                                    s.ready = true;
+                                    continue;
+                                }
+                                const WallShape& ws = spec_.walls[w].shape;
+                                if (!within_reach(a, ws)) {
+                                    clump_wall_ahead_[c].clear();
+                                } else {
+                                    const std::uint32_t a0 = element_begin_[a];
+                                    clump_wall_contacts(ws, member_c_.data() + a0,
+                                                        element_begin_[a + 1] - a0, hits,
+                                                        clump_wall_ahead_[c]);
+                                }
+                                clump_wall_ready_[c] = 1;
+                            } catch (...) { // left to the serial pass, which runs it again
+                                s.ready = false;
+                                clump_wall_ready_[c] = 0;
+                            }
                         }
                     }
                 }
@@ -1694,62 +1777,18 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         take_wall(one_wall);
                         continue;
                     }
+                    if (walls_ahead && clump_wall_ready_[c] != 0) {
+                        take_clump_wall(a, w, clump_wall_ahead_[c]);
+                        continue;
+                    }
                     const WallShape& ws = spec_.walls[w].shape;
                     if (!within_reach(a, ws)) {
                         continue;
                     }
                     const std::uint32_t a0 = element_begin_[a];
-                    const std::uint32_t n_el = element_begin_[a + 1] - a0;
-                    // The elements that may touch the wall, in order, from one pass without
-                    // branches: every element that is not a sphere, and the sphere elements
-                    // closer to touching than 1e-9 of their radius (far above the round-off of
-                    // the overlap). The exact test below decides; this one only drops the
-                    // members clearly apart, where a branch per member of a clump was
-                    // mispredicted often.
-                    wall_hits_.resize(n_el);
-                    std::size_t n_wh = 0;
-                    std::visit(
-                        [&](const auto& s) {
-                            const MemberSphere* mc = member_c_.data() + a0;
-                            std::uint32_t* hits = wall_hits_.data();
-                            for (std::uint32_t j = 0; j < n_el; ++j) {
-                                const double ov =
-                                    wall_contact(s, Vec3(mc[j].x, mc[j].y, mc[j].z), mc[j].r)
-                                        .overlap;
-                                const bool near = !(mc[j].r > 0.0) || ov > -1e-9 * mc[j].r;
-                                hits[n_wh] = a0 + j;
-                                n_wh += static_cast<std::size_t>(near);
-                            }
-                        },
-                        ws);
-                    for (std::size_t h = 0; h < n_wh; ++h) {
-                        const std::uint32_t ea = wall_hits_[h];
-                        const BodyContactKey key{p_.id[a], -1 - static_cast<std::int64_t>(w),
-                                                 static_cast<std::int32_t>(ea - a0), 0};
-                        const ContactGroup g{1, a, static_cast<std::uint32_t>(w), ea - a0};
-                        const MemberSphere& ms = member_c_[ea];
-                        if (ms.r > 0.0) { // a sphere element: element_wall_contact's sphere case
-                            const Vec3 centre(ms.x, ms.y, ms.z);
-                            const WallContact wc = std::visit(
-                                [&](const auto& s) { return wall_contact(s, centre, ms.r); }, ws);
-                            if (!(wc.overlap > 0.0)) {
-                                continue;
-                            }
-                            ElementContact ec;
-                            ec.touching = true;
-                            ec.overlap = wc.overlap;
-                            ec.normal = wc.n;
-                            ec.point = centre - (ms.r - 0.5 * wc.overlap) * wc.n;
-                            ec.r_eff = wc.r_eff;
-                            queue_wall(a, 2.0 * ms.r, ec, spec_.walls[w].material, key, g,
-                                       find_old(g, key.eb));
-                            continue;
-                        }
-                        // Only clumps have several elements, all spheres; a body of one convex
-                        // element took wall_query above.
-                        throw std::logic_error("body_forces: a convex element in a body of "
-                                               "several elements");
-                    }
+                    clump_wall_contacts(ws, member_c_.data() + a0, element_begin_[a + 1] - a0,
+                                        wall_hits_, one_clump_wall_);
+                    take_clump_wall(a, w, one_clump_wall_);
                 }
             }
             flush();
