@@ -487,7 +487,7 @@ void System::build_member_pairs() {
         }
         member_reach_[i] = std::sqrt(far2);
     }
-    // The pairs' histories start empty (in parallel: millions of entries in a large bed).
+    // The pairs' histories start empty (written on the threads, as the pairs were found).
     const std::size_t n_pairs = member_pairs_.size();
     member_shear_.resize(n_pairs);
     member_force_.resize(n_pairs);
