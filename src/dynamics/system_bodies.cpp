@@ -1699,8 +1699,23 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 const std::uint32_t a0 = element_begin_[a];
                 return element_begin_[a + 1] - a0 == 1 && !(member_c_[a0].r > 0.0);
             };
-            // The contacts of clump_wall_contacts for body a and wall w, to the law in the
-            // serial order.
+            // The contacts of a body of sphere elements (a clump) with wall w, into `out` (empty
+            // when its bounding sphere does not reach the wall): clump_wall_contacts, `hits` its
+            // scratch. Reads the poses only, so it may run ahead of the serial pass.
+            const auto clump_wall_query = [&](std::uint32_t a, std::uint32_t w,
+                                              std::vector<std::uint32_t>& hits,
+                                              std::vector<MemberWallContact>& out) {
+                const WallShape& ws = spec_.walls[w].shape;
+                if (!within_reach(a, ws)) {
+                    out.clear();
+                    return;
+                }
+                const std::uint32_t a0 = element_begin_[a];
+                clump_wall_contacts(ws, member_c_.data() + a0, element_begin_[a + 1] - a0, hits,
+                                    out);
+            };
+            // The contacts of clump_wall_query for body a and wall w, to the law in the serial
+            // order.
             const auto take_clump_wall = [&](std::uint32_t a, std::uint32_t w,
                                              const std::vector<MemberWallContact>& hits) {
                 const std::uint32_t a0 = element_begin_[a];
@@ -1743,15 +1758,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                                     s.ready = true;
                                     continue;
                                 }
-                                const WallShape& ws = spec_.walls[w].shape;
-                                if (!within_reach(a, ws)) {
-                                    clump_wall_ahead_[c].clear();
-                                } else {
-                                    const std::uint32_t a0 = element_begin_[a];
-                                    clump_wall_contacts(ws, member_c_.data() + a0,
-                                                        element_begin_[a + 1] - a0, hits,
-                                                        clump_wall_ahead_[c]);
-                                }
+                                clump_wall_query(a, w, hits, clump_wall_ahead_[c]);
                                 clump_wall_ready_[c] = 1;
                             } catch (...) { // left to the serial pass, which runs it again
                                 s.ready = false;
@@ -1781,13 +1788,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         take_clump_wall(a, w, clump_wall_ahead_[c]);
                         continue;
                     }
-                    const WallShape& ws = spec_.walls[w].shape;
-                    if (!within_reach(a, ws)) {
-                        continue;
-                    }
-                    const std::uint32_t a0 = element_begin_[a];
-                    clump_wall_contacts(ws, member_c_.data() + a0, element_begin_[a + 1] - a0,
-                                        wall_hits_, one_clump_wall_);
+                    clump_wall_query(a, w, wall_hits_, one_clump_wall_);
                     take_clump_wall(a, w, one_clump_wall_);
                 }
             }
