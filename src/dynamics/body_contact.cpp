@@ -579,9 +579,11 @@ ElementContact polyhedron_superquadric(const Element& p, const Element& s, const
         // step's motion of the best one, so the refinement starts there and EPA is not run (0.28
         // of the query's time; docs/performance.md, "Session 20"). GJK's distance decides whether
         // the bodies touch (a support plane with the origin outside the difference proves them
-        // apart).
+        // apart). Where a point of one body lies inside the other with room to spare, the bodies
+        // overlap and GJK would say so: it is not run (geometry::overlap_proved).
         Vec3 v;
-        if (geometry::shortest_vector(pp, ps, Vec3::Zero(), v)) {
+        if (!geometry::overlap_proved(pp, ps, *warm) &&
+            geometry::shortest_vector(pp, ps, Vec3::Zero(), v)) {
             return out;
         }
         out.converged = true;

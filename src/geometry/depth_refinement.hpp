@@ -214,6 +214,36 @@ template <class A, class B>
     return apart;
 }
 
+/// Do the polyhedron p and the superquadric s overlap, as shown by a point of one body about
+/// which a ball lies inside the other? (p: a PosedPolyhedron or any type with `shape->face_normals`,
+/// `shape->face_offsets` and `shape->radius` in the body frame, `support`, `x` and `q`; s: a
+/// PosedSuperquadric or any type with `shape->inside_outside` in the body frame, `support`, `x`
+/// and `q`.) The points tried are p's support along -m and s's along m (m: unit, world frame,
+/// from s towards p, e.g. a pair's last normal). If x lies in A and the ball of radius r about x
+/// in B, the overlap along every unit n is h_A(-n) + h_B(n) >= -n.x + n.(x + r n) = r, so no
+/// plane separates the bodies: true here means shortest_vector(p, s, 0, v) cannot prove them
+/// apart. The balls are far above the round-off of the supports (1e-16 of the size): for p's
+/// point, F < -1e-6 in s's frame (F + 1 scales as the distance from the centre to the power
+/// 2/e1), so the point moved out from s's centre by a factor 1 + 1e-6 e1 / 2 still lies inside
+/// and, s being convex, so does a ball of about 1e-6 e1 / 2 times s's inradius (at least that of
+/// the octahedron on its half-axes, which every superquadric with exponents up to 2 contains);
+/// for s's point, p's face planes (unit normals) lie 1e-9 of p's bounding radius beyond it.
+template <class P, class S>
+[[nodiscard]] bool overlap_proved(const P& p, const S& s, const Vec3& m) {
+    if (s.shape->inside_outside(s.q.conjugate() * Vec3(p.support(-m) - s.x)) < -1e-6) {
+        return true; // a vertex of p inside s: p's edge or corner in s
+    }
+    const auto& f = *p.shape;
+    const Vec3 x = p.q.conjugate() * Vec3(s.support(m) - p.x);
+    const double margin = -1e-9 * f.radius;
+    for (std::size_t k = 0; k < f.face_normals.size(); ++k) {
+        if (!(f.face_normals[k].dot(x) - f.face_offsets[k] < margin)) {
+            return false;
+        }
+    }
+    return true; // s's deepest point inside p: s against a face of p
+}
+
 /// Takes the unit direction `cand` (world, from b towards a) as the normal m when the overlap
 /// along it is smaller than `overlap` (then updated); returns whether it did.
 template <class A, class B>

@@ -167,4 +167,57 @@ TEST_F(DepthRefinement, OverlapAlongTheRefinedNormalIsTheDepth) {
     }
 }
 
+TEST_F(DepthRefinement, OverlapIsProvedOnlyWhereTheBodiesOverlap) {
+    // overlap_proved lets a resting pair skip GJK's test of whether it still touches, so it must
+    // never hold for bodies apart or touching to round-off (GJK could prove those apart), and it
+    // should hold for most overlapping pairs along a last normal near the best one. Cube and
+    // sphere (exact depth) at gaps and overlaps up to 5 % of the sphere's radius and within
+    // 1e-10 of it of touching, the normal turned by up to 1e-3 rad; then a superball (e = 0.5)
+    // against GJK's answer.
+    std::mt19937_64 rng(9);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::normal_distribution<double> nd;
+    const double r = sphere_.half_axes.x();
+    const auto last_normal = [&](const Vec3& exact) {
+        return Vec3(exact + 1e-3 * u(rng) * Vec3(nd(rng), nd(rng), nd(rng)).normalized())
+            .normalized();
+    };
+    int overlapping = 0;
+    int proved = 0;
+    int near_touching = 0;
+    for (int n = 0; n < 4000; ++n) {
+        const double dist = r * (1.0 + (n % 4 == 0 ? 1e-10 : 0.05) * u(rng));
+        const Pair p = random_pair(cube_, sphere_, h_, r, dist, rng);
+        const bool shown = g::overlap_proved(p.cube, p.sphere, last_normal(p.normal));
+        if (shown) {
+            EXPECT_GT(p.exact, 0.0) << "pair " << n << ", gap " << -p.exact / r << " of r";
+            Vec3 v;
+            EXPECT_FALSE(g::shortest_vector(p.cube, p.sphere, Vec3::Zero(), v)) << "pair " << n;
+        }
+        near_touching += n % 4 == 0 ? 1 : 0;
+        if (p.exact > 1e-3 * r) {
+            ++overlapping;
+            proved += shown ? 1 : 0;
+        }
+    }
+    EXPECT_GT(near_touching, 900);
+    EXPECT_GT(proved, 0.9 * overlapping) << proved << " of " << overlapping;
+
+    g::Superquadric ball = sphere_;
+    ball.e1 = ball.e2 = 0.5;
+    int shown_ball = 0;
+    for (int n = 0; n < 2000; ++n) {
+        Pair p = random_pair(cube_, sphere_, h_, r, r * (1.0 + 0.05 * u(rng)), rng);
+        p.sphere.shape = &ball; // a blockier body about the same centre: no exact depth
+        const Vec3 m = last_normal(p.normal);
+        if (g::overlap_proved(p.cube, p.sphere, m)) {
+            ++shown_ball;
+            Vec3 v;
+            EXPECT_FALSE(g::shortest_vector(p.cube, p.sphere, Vec3::Zero(), v)) << "pair " << n;
+            EXPECT_GT(g::overlap_along(p.cube, p.sphere, m), 0.0) << "pair " << n;
+        }
+    }
+    EXPECT_GT(shown_ball, 500);
+}
+
 } // namespace
