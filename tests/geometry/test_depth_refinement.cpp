@@ -102,10 +102,13 @@ TEST_F(DepthRefinement, ShortestVectorOfSeparatedBodiesIsTheDistance) {
     // margin of about 4; the refinement does not rest on GJK's accuracy (it keeps a direction only
     // where the overlap along it is smaller, and edges and faces get their own exact steps).
     std::mt19937_64 rng(3);
+    std::mt19937_64 guess_rng(4); // its own stream: the pairs are those measured in session 19
     const double r = sphere_.half_axes.x();
     const double scale = h_ * std::sqrt(3.0) + r;
     double worst_length = 0.0;
     double worst_angle = 0.0;
+    double worst_length_guess = 0.0;
+    double worst_angle_guess = 0.0;
     for (int n = 0; n < 300; ++n) {
         const double gap = (n % 3 == 0 ? 1e-4 : n % 3 == 1 ? 1e-2 : 1e-1) * scale;
         const Pair p = random_pair(cube_, sphere_, h_, r, r + gap, rng);
@@ -117,9 +120,24 @@ TEST_F(DepthRefinement, ShortestVectorOfSeparatedBodiesIsTheDistance) {
         worst_angle = std::max(worst_angle, angle);
         EXPECT_LT(length, 5e-4) << "pair " << n;
         EXPECT_LT(angle, 2e-3) << "pair " << n;
+        // Started from a guess of the direction (as refine_normal does): near the normal (turned
+        // by up to 0.1 rad), or opposite to it, the same answer to the same accuracy.
+        std::normal_distribution<double> nd;
+        const Vec3 turn = 0.1 * Vec3(nd(guess_rng), nd(guess_rng), nd(guess_rng)).normalized();
+        const Vec3 guess = n % 5 == 0 ? Vec3(-p.normal) : Vec3((p.normal + turn).normalized());
+        Vec3 w;
+        ASSERT_TRUE(g::shortest_vector(p.cube, p.sphere, Vec3::Zero(), w, 1e-12, 128, &guess))
+            << "pair " << n;
+        const double length_w = std::abs(w.norm() - gap) / gap;
+        const double angle_w = std::acos(std::min(1.0, w.normalized().dot(p.normal)));
+        worst_length_guess = std::max(worst_length_guess, length_w);
+        worst_angle_guess = std::max(worst_angle_guess, angle_w);
+        EXPECT_LT(length_w, 5e-4) << "pair " << n << ", started from a guess";
+        EXPECT_LT(angle_w, 2e-3) << "pair " << n << ", started from a guess";
     }
-    std::printf("  worst relative error of the distance %.2e, of the direction %.2e rad\n",
-                worst_length, worst_angle);
+    std::printf("  worst relative error of the distance %.2e, of the direction %.2e rad; started "
+                "from a guess %.2e, %.2e rad\n",
+                worst_length, worst_angle, worst_length_guess, worst_angle_guess);
     // Overlapping bodies are not proved apart.
     const Pair p = random_pair(cube_, sphere_, h_, r, r - 1e-3 * scale, rng);
     Vec3 v;
