@@ -227,13 +227,13 @@ template <class A, class B>
 }
 
 /// Do the polyhedron p and the superquadric s overlap, as shown by a point of one body about
-/// which a ball lies inside the other? (p: a PosedPolyhedron or any type with `shape->face_normals`,
-/// `shape->face_offsets` and `shape->radius` in the body frame, `support`, `x` and `q`; s: a
-/// PosedSuperquadric or any type with `shape->inside_outside` in the body frame, `support`, `x`
-/// and `q`.) The points tried are p's support along -m and s's along m (m: unit, world frame,
-/// from s towards p, e.g. a pair's last normal). If x lies in A and the ball of radius r about x
-/// in B, the overlap along every unit n is h_A(-n) + h_B(n) >= -n.x + n.(x + r n) = r, so no
-/// plane separates the bodies: true here means shortest_vector(p, s, 0, v) cannot prove them
+/// which a ball lies inside the other? (p: a PosedPolyhedron or any type with
+/// `shape->face_normals`, `shape->face_offsets` and `shape->radius` in the body frame, `support`,
+/// `x` and `q`; s: a PosedSuperquadric or any type with `shape->inside_outside` in the body frame,
+/// `support`, `x` and `q`.) The points tried are p's support along -m and s's along m (m: unit,
+/// world frame, from s towards p, e.g. a pair's last normal). If x lies in A and the ball of radius
+/// r about x in B, the overlap along every unit n is h_A(-n) + h_B(n) >= -n.x + n.(x + r n) = r, so
+/// no plane separates the bodies: true here means shortest_vector(p, s, 0, v) cannot prove them
 /// apart. The balls are far above the round-off of the supports (1e-16 of the size): for p's
 /// point, F < -1e-6 in s's frame (F + 1 scales as the distance from the centre to the power
 /// 2/e1), so the point moved out from s's centre by a factor 1 + 1e-6 e1 / 2 still lies inside
