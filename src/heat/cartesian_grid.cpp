@@ -446,7 +446,9 @@ ThermalGrid make_cartesian_grid(const Shape& shape, const CartesianResolution& r
             id[c] = id[static_cast<std::size_t>(target[c])];
         }
     }
-    return assemble(g, id, count, vol, node, patch, ap);
+    ThermalGrid out = assemble(g, id, count, vol, node, patch, ap);
+    index_boundary(out);
+    return out;
 }
 
 } // namespace kiln::heat

@@ -109,6 +109,7 @@ ThermalGrid make_spherical_grid(double radius, const SphericalResolution& res) {
             }
         }
     }
+    index_boundary(g);
     return g;
 }
 
