@@ -49,7 +49,7 @@ struct ThermalGrid {
     std::vector<BoundaryFace> boundary;  ///< surface patches, at most one per boundary cell
     std::vector<BoundaryCluster> clusters; ///< the patches grouped in space (index_boundary);
                                            ///< empty: not grouped (queries scan every patch)
-    int centre_cell = 0;                   ///< the cell containing the origin (the "core" node)
+    int centre_cell = 0;                 ///< the cell containing the origin (the "core" node)
 
     /// Number of cells (unknowns).
     [[nodiscard]] int size() const { return static_cast<int>(volume.size()); }
