@@ -446,9 +446,7 @@ ThermalGrid make_cartesian_grid(const Shape& shape, const CartesianResolution& r
             id[c] = id[static_cast<std::size_t>(target[c])];
         }
     }
-    ThermalGrid out = assemble(g, id, count, vol, node, patch, ap);
-    index_boundary(out);
-    return out;
+    return assemble(g, id, count, vol, node, patch, ap);
 }
 
 } // namespace kiln::heat

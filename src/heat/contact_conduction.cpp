@@ -77,86 +77,27 @@ std::vector<int> contact_patches(const ThermalGrid& grid, const Vec3& point, con
     }
     const Vec3 n = normal / n_len;
     std::vector<int> out;
-    // The patches under the disc among `faces` (ascending), in order.
-    const auto under = [&](const auto& faces) {
-        for (const auto b : faces) {
-            const BoundaryFace& f = grid.boundary[static_cast<std::size_t>(b)];
-            if (f.area_normal.dot(n) <= 0.0) {
-                continue;
-            }
-            const Vec3 rel = f.centroid - point;
-            const Vec3 lateral = rel - rel.dot(n) * n; // offset from the contact axis (m)
-            if (lateral.norm() <= contact_radius) {
-                out.push_back(static_cast<int>(b));
-            }
+    int nearest = -1;
+    double nearest_d2 = std::numeric_limits<double>::infinity();
+    for (std::size_t b = 0; b < grid.boundary.size(); ++b) {
+        const BoundaryFace& f = grid.boundary[b];
+        const Vec3 rel = f.centroid - point;
+        const double d2 = rel.squaredNorm();
+        if (d2 < nearest_d2) {
+            nearest_d2 = d2;
+            nearest = static_cast<int>(b);
         }
-    };
-    // The patch among `faces` (ascending) whose centroid is nearest to the point (the first of
-    // equals).
-    const auto nearest = [&](const auto& faces) {
-        int best = -1;
-        double best_d2 = std::numeric_limits<double>::infinity();
-        for (const auto b : faces) {
-            const double d2 =
-                (grid.boundary[static_cast<std::size_t>(b)].centroid - point).squaredNorm();
-            if (d2 < best_d2) {
-                best_d2 = d2;
-                best = static_cast<int>(b);
-            }
+        if (f.area_normal.dot(n) <= 0.0) {
+            continue;
         }
-        if (best >= 0) {
-            out.push_back(best);
+        const Vec3 lateral = rel - rel.dot(n) * n; // offset from the contact axis (m)
+        if (lateral.norm() <= contact_radius) {
+            out.push_back(static_cast<int>(b));
         }
-    };
-    if (grid.clusters.empty()) {
-        const std::vector<int> all = [&] {
-            std::vector<int> v(grid.boundary.size());
-            for (std::size_t b = 0; b < v.size(); ++b) {
-                v[b] = static_cast<int>(b);
-            }
-            return v;
-        }();
-        under(all);
-        if (out.empty()) {
-            nearest(all);
-        }
-        return out;
     }
-    // Only the groups that can hold an answer (BoundaryCluster): a centroid within r of the axis,
-    // or of the point, puts its group's centre within r plus the group's radius of it (triangle
-    // inequality); the factor 1 + 1e-9 covers the round-off of the distances. The patches of
-    // those groups are then tested in ascending order by the same expressions as every patch
-    // was, so the answer is the full scan's.
-    thread_local std::vector<int> picked;
-    const auto pick = [&](const auto& keep) {
-        picked.clear();
-        for (const BoundaryCluster& c : grid.clusters) {
-            if (keep(c)) {
-                picked.insert(picked.end(), c.faces.begin(), c.faces.end());
-            }
-        }
-        std::sort(picked.begin(), picked.end());
-    };
-    constexpr double kSlack = 1.0 + 1e-9;
-    pick([&](const BoundaryCluster& c) {
-        const Vec3 rel = c.centre - point;
-        const Vec3 lateral = rel - rel.dot(n) * n;
-        return !(lateral.norm() > (contact_radius + c.radius) * kSlack);
-    });
-    under(picked);
-    if (!out.empty()) {
-        return out;
+    if (out.empty() && nearest >= 0) {
+        out.push_back(nearest);
     }
-    // No patch under the disc: the nearest. Some centroid lies within `reach` of the point (its
-    // group's centre distance plus radius), so groups farther than that hold no candidate.
-    double reach = std::numeric_limits<double>::infinity();
-    for (const BoundaryCluster& c : grid.clusters) {
-        reach = std::min(reach, (c.centre - point).norm() + c.radius);
-    }
-    pick([&](const BoundaryCluster& c) {
-        return !((c.centre - point).norm() - c.radius > reach * kSlack);
-    });
-    nearest(picked);
     return out;
 }
 

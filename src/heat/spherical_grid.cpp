@@ -109,7 +109,6 @@ ThermalGrid make_spherical_grid(double radius, const SphericalResolution& res) {
             }
         }
     }
-    index_boundary(g);
     return g;
 }
 

@@ -5,9 +5,6 @@
 
 #include "core/types.hpp"
 
-#include <algorithm>
-#include <cmath>
-#include <limits>
 #include <string>
 #include <vector>
 
@@ -30,15 +27,6 @@ struct BoundaryFace {
                          ///< is the node-to-surface conductance (W/K)
 };
 
-/// Boundary patches grouped by position: a ball (body frame) holding the centroids of the group,
-/// and the group's patch indices, ascending. Lets a query near one point of the surface
-/// (contact_patches) pass over the groups far from it.
-struct BoundaryCluster {
-    Vec3 centre = Vec3::Zero(); ///< centre of the ball (m), body frame
-    double radius = 0;          ///< radius of the ball holding the group's centroids (m)
-    std::vector<int> faces;     ///< indices into ThermalGrid::boundary, ascending
-};
-
 /// Geometry of a template grid; all vectors in the body frame, centre of mass at the origin.
 struct ThermalGrid {
     std::string kind;                    ///< "spherical" or "cartesian" (for reports)
@@ -47,8 +35,6 @@ struct ThermalGrid {
     std::vector<Vec3> node;              ///< node (temperature) position of each cell (m)
     std::vector<CellLink> links;         ///< conduction links, each pair once (or once per face)
     std::vector<BoundaryFace> boundary;  ///< surface patches, at most one per boundary cell
-    std::vector<BoundaryCluster> clusters; ///< the patches grouped in space (index_boundary);
-                                           ///< empty: not grouped (queries scan every patch)
     int centre_cell = 0;                 ///< the cell containing the origin (the "core" node)
 
     /// Number of cells (unknowns).
@@ -83,52 +69,6 @@ inline Vec3 ThermalGrid::total_area_normal() const {
         n += f.area_normal;
     }
     return n;
-}
-
-/// Groups g.boundary into g.clusters: the boxes of a `per_axis`^3 lattice over the bounding box of
-/// the centroids, each non-empty box one group (its ball centred on its centroids' bounding box).
-/// The grid builders call it; a grid assembled by hand works without it.
-inline void index_boundary(ThermalGrid& g, int per_axis = 4) {
-    g.clusters.clear();
-    if (g.boundary.empty() || per_axis < 1) {
-        return;
-    }
-    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity());
-    Vec3 hi = -lo;
-    for (const BoundaryFace& f : g.boundary) {
-        lo = lo.cwiseMin(f.centroid);
-        hi = hi.cwiseMax(f.centroid);
-    }
-    const Vec3 span = hi - lo;
-    std::vector<std::vector<int>> boxes(static_cast<std::size_t>(per_axis * per_axis * per_axis));
-    for (std::size_t b = 0; b < g.boundary.size(); ++b) {
-        int key = 0;
-        for (int d = 0; d < 3; ++d) {
-            const double t = span[d] > 0.0 ? (g.boundary[b].centroid[d] - lo[d]) / span[d] : 0.0;
-            const int i = std::clamp(static_cast<int>(std::floor(t * per_axis)), 0, per_axis - 1);
-            key = key * per_axis + i;
-        }
-        boxes[static_cast<std::size_t>(key)].push_back(static_cast<int>(b));
-    }
-    for (std::vector<int>& faces : boxes) {
-        if (faces.empty()) {
-            continue;
-        }
-        Vec3 blo = Vec3::Constant(std::numeric_limits<double>::infinity());
-        Vec3 bhi = -blo;
-        for (const int b : faces) {
-            blo = blo.cwiseMin(g.boundary[static_cast<std::size_t>(b)].centroid);
-            bhi = bhi.cwiseMax(g.boundary[static_cast<std::size_t>(b)].centroid);
-        }
-        BoundaryCluster c;
-        c.centre = 0.5 * (blo + bhi);
-        for (const int b : faces) {
-            c.radius = std::max(
-                c.radius, (g.boundary[static_cast<std::size_t>(b)].centroid - c.centre).norm());
-        }
-        c.faces = std::move(faces);
-        g.clusters.push_back(std::move(c));
-    }
 }
 
 } // namespace kiln::heat

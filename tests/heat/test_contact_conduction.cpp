@@ -9,7 +9,6 @@
 #include <cmath>
 #include <gtest/gtest.h>
 #include <limits>
-#include <random>
 #include <vector>
 
 namespace kiln::heat {
@@ -126,45 +125,6 @@ TEST(ContactConduction, DistributionIsConservative) {
     std::vector<double> wrong(3, 0.0);
     EXPECT_THROW((void)distribute_contact_heat(g, Vec3(0, 0, r), Vec3(0, 0, 1), 1e-2, 1.0, wrong),
                  InputError);
-}
-
-TEST(ContactConduction, GroupedPatchesGiveTheFullScansAnswer) {
-    // contact_patches passes over the groups of patches (BoundaryCluster) far from the contact;
-    // it must return exactly the patches, in the order, that a scan of every patch returns (the
-    // same grid with its groups removed). Spherical and Cartesian grids of a sphere, a box and a
-    // superball; contact points on and off the surface (gas gaps and overlaps), random normals
-    // (tilted against the surface too), discs from far below a patch (the nearest-patch answer)
-    // to wider than the body.
-    const double r = 0.004;
-    std::vector<ThermalGrid> grids;
-    grids.push_back(make_spherical_grid(r, {6, 12, 16}));
-    grids.push_back(make_cartesian_grid(Sphere{r}, {.cells_across = 8}));
-    grids.push_back(make_cartesian_grid(Box{Vec3(r, 0.6 * r, 0.8 * r)}, {.cells_across = 8}));
-    grids.push_back(
-        make_cartesian_grid(Superquadric{Vec3::Constant(r), 0.5, 0.5}, {.cells_across = 10}));
-    std::mt19937_64 rng(21);
-    std::normal_distribution<double> nd;
-    std::uniform_real_distribution<double> u(0.0, 1.0);
-    for (const ThermalGrid& g : grids) {
-        ASSERT_FALSE(g.clusters.empty()) << g.kind;
-        ThermalGrid flat = g;
-        flat.clusters.clear();
-        int nearest_only = 0;
-        int several = 0;
-        for (int n = 0; n < 3000; ++n) {
-            const Vec3 dir = Vec3(nd(rng), nd(rng), nd(rng)).normalized();
-            const Vec3 point = (0.7 + 0.5 * u(rng)) * r * dir;
-            const Vec3 normal = (dir + 0.6 * Vec3(nd(rng), nd(rng), nd(rng))).normalized();
-            const double rc = r * std::pow(10.0, -4.0 + 4.5 * u(rng));
-            const std::vector<int> grouped = contact_patches(g, point, normal, rc);
-            ASSERT_EQ(grouped, contact_patches(flat, point, normal, rc))
-                << g.kind << " query " << n << ", disc " << rc / r << " of r";
-            nearest_only += grouped.size() == 1 ? 1 : 0;
-            several += grouped.size() > 1 ? 1 : 0;
-        }
-        EXPECT_GT(nearest_only, 300) << g.kind;
-        EXPECT_GT(several, 300) << g.kind;
-    }
 }
 
 TEST(ContactConduction, SwappingThePairFlipsTheSign) {
