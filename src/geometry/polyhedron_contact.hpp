@@ -32,6 +32,7 @@
 
 #include <array>
 #include <functional>
+#include <optional>
 #include <vector>
 
 namespace kiln::geometry {
@@ -48,6 +49,19 @@ struct PolyhedronFeatures {
     /// Volume-equivalent sphere radius (m), kept so the step loop does not take a cube root per
     /// body and step.
     double r_equiv = 0.0;
+
+    /// A rectangular box (cuboid) centred on the body origin, given by its faces: two boxes meet
+    /// in the closed form of the separating-axis test (polyhedron_contact.cpp, box_plane) instead
+    /// of the general search and its memory.
+    struct Box {
+        Mat3 axes;                ///< columns: unit normals of three faces, one per pair (body frame)
+        Vec3 half;                ///< half extents along the columns of axes (m)
+        std::array<int, 3> plus;  ///< face index whose normal is axes.col(i)
+        std::array<int, 3> minus; ///< face index whose normal is -axes.col(i)
+    };
+    /// Set by polyhedron_features when the polyhedron is a box to 1e-12 of its radius (face
+    /// normals opposite and orthogonal, every vertex on a corner); empty for other shapes.
+    std::optional<Box> box;
 
     /// Support point (m, body frame): the vertex maximising d . x for a body-frame direction d.
     [[nodiscard]] Vec3 support(const Vec3& d_body) const;
