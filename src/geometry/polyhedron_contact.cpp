@@ -852,8 +852,8 @@ void box_plane(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const
     c.iterations += count;
     best = top;
     if (win < 3) {
-        const auto k = static_cast<std::size_t>(t[win] < 0.0 ? ba.minus[static_cast<std::size_t>(win)]
-                                                             : ba.plus[static_cast<std::size_t>(win)]);
+        const auto i = static_cast<std::size_t>(win);
+        const auto k = static_cast<std::size_t>(t[win] < 0.0 ? ba.minus[i] : ba.plus[i]);
         best_m = -fa.face_normals[k];
         c.feature = CommonPlaneFeature::kFaceOfA;
     } else if (win < 6) {

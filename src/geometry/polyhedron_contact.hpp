@@ -54,8 +54,8 @@ struct PolyhedronFeatures {
     /// in the closed form of the separating-axis test (polyhedron_contact.cpp, box_plane) instead
     /// of the general search and its memory.
     struct Box {
-        Mat3 axes;                ///< columns: unit normals of three faces, one per pair (body frame)
-        Vec3 half;                ///< half extents along the columns of axes (m)
+        Mat3 axes; ///< columns: unit normals of three faces, one per pair (body frame)
+        Vec3 half; ///< half extents along the columns of axes (m)
         std::array<int, 3> plus;  ///< face index whose normal is axes.col(i)
         std::array<int, 3> minus; ///< face index whose normal is -axes.col(i)
     };

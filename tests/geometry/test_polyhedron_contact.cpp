@@ -641,9 +641,10 @@ TEST(PolyhedronContact, BoxPairsAgreeWithTheGeneralSearch) {
                     const g::PolyhedronFeatures::Box& ba = *shapes[i].box;
                     const g::PolyhedronFeatures::Box& bb = *shapes[j].box;
                     p.a.q = Quat(nd(rng), nd(rng), nd(rng), nd(rng)).normalized();
-                    const kiln::Mat3 turn = small_turn(std::exp(log_turn(rng)), rng).toRotationMatrix();
-                    const kiln::Mat3 rot_b = p.a.q.toRotationMatrix() * ba.axes * turn *
-                                       bb.axes.transpose();
+                    const kiln::Mat3 turn =
+                        small_turn(std::exp(log_turn(rng)), rng).toRotationMatrix();
+                    const kiln::Mat3 rot_b =
+                        p.a.q.toRotationMatrix() * ba.axes * turn * bb.axes.transpose();
                     p.b.q = Quat(rot_b).normalized();
                     const Vec3 up = p.a.q * Vec3(ba.axes.col(2));
                     const double gap = (n % 2 == 0 ? -1.0 : 1.0) * 1e-3 * std::exp(nd(rng)) *
@@ -676,8 +677,7 @@ TEST(PolyhedronContact, BoxPairsAgreeWithTheGeneralSearch) {
                 ++touching;
                 edge_planes += fast.feature == g::CommonPlaneFeature::kEdgeEdge ? 1 : 0;
                 EXPECT_NEAR(fast.depth, full.depth, margin) << n;
-                EXPECT_NEAR(g::polyhedron_overlap_along(p.a, p.b, fast.normal), full.depth,
-                            margin)
+                EXPECT_NEAR(g::polyhedron_overlap_along(p.a, p.b, fast.normal), full.depth, margin)
                     << n;
                 worst = std::max(worst, std::abs(fast.depth - full.depth) / scale);
             }
