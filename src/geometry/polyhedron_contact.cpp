@@ -185,6 +185,7 @@ namespace search {
 /// B's pose and vertices in A's frame (enough for A's face stage, which rejects most near misses).
 void make_relative(const PosedPolyhedron& a, const PosedPolyhedron& b, Relative& r) {
     r.pruned = false;
+    r.faces = false;
     const Quat qab = a.q.conjugate() * b.q;
     r.rot = qab.toRotationMatrix();
     r.shift = a.q.conjugate() * (b.x - a.x);
@@ -197,6 +198,7 @@ void make_relative(const PosedPolyhedron& a, const PosedPolyhedron& b, Relative&
 
 /// B's face planes in A's frame (after make_relative).
 void relative_faces(const PolyhedronFeatures& fb, Relative& r) {
+    r.faces = true;
     r.nb.resize(fb.face_normals.size());
     r.ob.resize(fb.face_normals.size());
     for (std::size_t k = 0; k < fb.face_normals.size(); ++k) {
@@ -371,7 +373,7 @@ PlaneDepth plane_depth(const PolyhedronFeatures& fa, const Relative& r, const Ve
 /// Points and patch for the normal m (unit, from B to A), all in A's body frame; the result's
 /// vectors are converted to the world frame of A at the end. `point_only`: the points and the
 /// patch polygon are left empty (depth, normal, point and patch_area the same numbers).
-PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b, const Relative& r,
+PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b, Relative& r,
                              const Vec3& m, bool point_only = false) {
     const PolyhedronFeatures& fa = *a.shape;
     const PolyhedronFeatures& fb = *b.shape;
@@ -416,6 +418,9 @@ PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b,
     raw.clear();
     pts.clear();
     if (!point_only || !has_patch) {
+        if (!r.faces) {
+            relative_faces(fb, r); // (two boxes' closed form leaves B's planes to here)
+        }
         const auto clip_a = [&](const std::array<int, 4>& e) {
             clip_edge(fa.vertices[static_cast<std::size_t>(e[0])],
                       fa.vertices[static_cast<std::size_t>(e[1])], r.nb, r.ob, raw);
@@ -905,9 +910,6 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
     if (scan == detail::FaceScan::automatic && fa.box && fb.box) {
         // Two boxes: the closed form, and no memory (the closed form costs less than one).
         box_plane(fa, fb, r, best, best_m, c);
-        if (best <= 0.0) {
-            relative_faces(fb, r); // the patch's clip reads B's planes
-        }
     } else {
         // A resting pair's memory first (same answer); the full search when it cannot tell.
         const bool from_memo = memo != nullptr && memo_search(fa, fb, r, *memo, best, best_m, c);

@@ -42,6 +42,7 @@ struct Relative {
     DistanceTable dist_b, dist_a;
     std::vector<int> edges_a, edges_b; // feature edges kept for the edge-edge stage
     bool pruned = false;               // edges_a/edges_b are valid for this pose
+    bool faces = false;                // nb/ob are valid for this pose (relative_faces)
     bool full_tables = false;          // dist_b and dist_a hold every distance (full search)
 };
 
