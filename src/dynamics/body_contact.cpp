@@ -413,31 +413,25 @@ ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase m
     }
     if (exact) {
         // The patch only where pair_point reads it (face on face): the same numbers as with it.
-        // (The plane's normal and depth are those of the result, so the lists serve pair_point.)
-        // One pointer captured, so the std::function keeps the test in its own storage (a
-        // capture of five references took a heap allocation per query).
-        struct Near {
-            const geometry::PosedPolyhedron& pa;
-            const geometry::PosedPolyhedron& pb;
-            std::vector<std::pair<Vec3, double>>& va;
-            std::vector<std::pair<Vec3, double>>& vb;
-            bool& known;
-        } near{pa, pb, va, vb, near_known};
-        const geometry::PatchTest need = [n = &near](const geometry::PolyhedronContact& c) {
+        // The near supports come from the plane's own heights (geometry::NearBand), filled before
+        // the test for a touching pair. One pointer captured, so the std::function keeps the
+        // test in its own storage (a capture of five references took a heap allocation per
+        // query).
+        const geometry::NearBand band{kTieBand, &va, &vb};
+        const geometry::PatchTest need = [known =
+                                              &near_known](const geometry::PolyhedronContact& c) {
             if (!c.touching) {
                 return false;
             }
-            near_support(n->pa, -c.normal, c.depth, n->va);
-            n->known = true;
-            if (n->va.size() == 1) { // a vertex of a: pair_point reads neither b's list nor
-                n->vb.clear();       // the patch
+            *known = true;
+            if (va.size() == 1) { // a vertex of a: pair_point reads neither b's list nor
+                vb.clear();       // the patch
                 return false;
             }
-            near_support(n->pb, c.normal, c.depth, n->vb);
-            return pair_point_needs_patch(n->va, n->vb);
+            return pair_point_needs_patch(va, vb);
         };
         // Only the point is read here: the points and the patch polygon are not built.
-        pc = geometry::polyhedron_contact_point(pa, pb, need, memo);
+        pc = geometry::polyhedron_contact_point(pa, pb, need, memo, &band);
         out.converged = pc.converged;
         if (pc.converged && !pc.touching && pc.depth < 0.0 && sep != nullptr) {
             *sep = pc.normal; // the common plane of the largest gap

@@ -349,12 +349,18 @@ struct PlaneDepth {
     std::size_t deepest_b; // a vertex of B where d_b is reached (the first)
 };
 
-PlaneDepth plane_depth(const PolyhedronFeatures& fa, const Relative& r, const Vec3& m) {
+/// `heights`: m . x of each vertex kept as well, A's in ha and B's in hb (sized by the caller).
+template <bool heights = false>
+PlaneDepth plane_depth(const PolyhedronFeatures& fa, const Relative& r, const Vec3& m,
+                       double* ha = nullptr, double* hb = nullptr) {
     // m . x over each body's vertices: the extremes and where they are first reached.
     PlaneDepth p{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
                  0, 0};
     for (std::size_t i = 0; i < fa.vertices.size(); ++i) {
         const double h = m.dot(fa.vertices[i]);
+        if constexpr (heights) {
+            ha[i] = h;
+        }
         if (h < p.d_a) {
             p.d_a = h;
             p.deepest_a = i;
@@ -362,12 +368,37 @@ PlaneDepth plane_depth(const PolyhedronFeatures& fa, const Relative& r, const Ve
     }
     for (std::size_t j = 0; j < r.vb.size(); ++j) {
         const double h = m.dot(r.vb[j]);
+        if constexpr (heights) {
+            hb[j] = h;
+        }
         if (h > p.d_b) {
             p.d_b = h;
             p.deepest_b = j;
         }
     }
     return p;
+}
+
+/// The lists of NearBand from the heights of plane_depth (A's vertices lowest along m, B's
+/// highest; depth = d_b - d_a > 0).
+void near_band(const PosedPolyhedron& a, const PosedPolyhedron& b, const PlaneDepth& pd,
+               const double* ha, const double* hb, const NearBand& near) {
+    const double band = near.fraction * (pd.d_b - pd.d_a);
+    const auto fill = [band](const PosedPolyhedron& p, const double* h, double top, double sign,
+                             NearVertices& out) {
+        out.clear();
+        const std::vector<Vec3>& vs = p.shape->vertices;
+        for (std::size_t i = 0; i < vs.size(); ++i) {
+            // below < band exactly when the rounded 1 - below / band is positive (band > 0),
+            // so the division runs only in the band.
+            const double below = sign * (top - h[i]);
+            if (below < band) {
+                out.emplace_back(p.x + p.q * vs[i], 1.0 - below / band);
+            }
+        }
+    };
+    fill(a, ha, pd.d_a, -1.0, *near.a);
+    fill(b, hb, pd.d_b, 1.0, *near.b);
 }
 
 /// Points and patch for the normal m (unit, from B to A), all in A's body frame; the result's
@@ -885,7 +916,8 @@ void box_plane(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const
 /// `point_only`: points and patch polygon left empty (see patch_in_a).
 PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& b, bool with_patch,
                                const PatchTest* need_patch, detail::FaceScan scan,
-                               PlaneMemo* memo = nullptr, bool point_only = false) {
+                               PlaneMemo* memo = nullptr, bool point_only = false,
+                               const NearBand* near = nullptr) {
     PolyhedronContact c;
     const PolyhedronFeatures& fa = *a.shape;
     const PolyhedronFeatures& fb = *b.shape;
@@ -945,9 +977,21 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
     if (need_patch != nullptr) {
         // The depth as the patch would give it (its own vertex loops), so the numbers do not
         // depend on the decision.
-        const PlaneDepth pd = plane_depth(fa, r, best_m);
+        thread_local std::vector<double> ha;
+        thread_local std::vector<double> hb;
+        PlaneDepth pd;
+        if (near != nullptr) {
+            ha.resize(fa.vertices.size());
+            hb.resize(r.vb.size());
+            pd = plane_depth<true>(fa, r, best_m, ha.data(), hb.data());
+        } else {
+            pd = plane_depth(fa, r, best_m);
+        }
         c.depth = pd.d_b - pd.d_a;
         c.touching = c.depth > 0.0;
+        if (near != nullptr && c.touching) {
+            near_band(a, b, pd, ha.data(), hb.data(), *near);
+        }
         c.normal = a.q * best_m;
         // The deepest vertices of the loops above (A's frame; B's already turned into it), not
         // two more support searches.
@@ -1008,8 +1052,9 @@ PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhe
 }
 
 PolyhedronContact polyhedron_contact_point(const PosedPolyhedron& a, const PosedPolyhedron& b,
-                                           const PatchTest& need_patch, PlaneMemo* memo) {
-    return common_plane(a, b, true, &need_patch, detail::FaceScan::automatic, memo, true);
+                                           const PatchTest& need_patch, PlaneMemo* memo,
+                                           const NearBand* near) {
+    return common_plane(a, b, true, &need_patch, detail::FaceScan::automatic, memo, true, near);
 }
 
 namespace detail {

@@ -33,6 +33,7 @@
 #include <array>
 #include <functional>
 #include <optional>
+#include <utility>
 #include <vector>
 
 namespace kiln::geometry {
@@ -179,13 +180,31 @@ struct PlaneMemo {
                                                    const PosedPolyhedron& b,
                                                    const PatchTest& need_patch, PlaneMemo& memo);
 
+/// Vertices of a body near its support plane: world position (m) and weight (-), see NearBand.
+using NearVertices = std::vector<std::pair<Vec3, double>>;
+
+/// The vertices of each body within a band of its support plane along the common plane's normal,
+/// filled by polyhedron_contact_point before it calls the patch test of a touching pair: `a` gets
+/// A's vertices whose height along -normal lies within fraction * depth of A's largest, `b`
+/// B's along +normal, each in the order of the body's vertices, with the weight
+/// 1 - (largest - height) / (fraction * depth) (> 0). The heights are those of the plane's own
+/// depth (A's body frame), so no body is searched twice.
+struct NearBand {
+    double fraction = 0.0;     ///< band as a fraction of the depth (> 0)
+    NearVertices* a = nullptr; ///< A's vertices (cleared first)
+    NearVertices* b = nullptr; ///< B's vertices (cleared first)
+};
+
 /// As polyhedron_contact with `need_patch` and the memory (nullptr: none), for a caller that reads
 /// only touching, converged, depth, normal, point, patch_area and feature: those are the same
-/// numbers, while `points` and `patch` are left empty (not turned to the world frame).
+/// numbers, while `points` and `patch` are left empty (not turned to the world frame). With
+/// `near`, its lists are filled for a touching pair before `need_patch` is called (and left as
+/// they were otherwise).
 [[nodiscard]] PolyhedronContact polyhedron_contact_point(const PosedPolyhedron& a,
                                                          const PosedPolyhedron& b,
                                                          const PatchTest& need_patch,
-                                                         PlaneMemo* memo);
+                                                         PlaneMemo* memo,
+                                                         const NearBand* near = nullptr);
 
 /// Counters of the memory route in this thread (for tests and benchmarks): queries that tried it,
 /// and those it answered.
