@@ -64,9 +64,6 @@ std::optional<PolyhedronFeatures::Box> box_of(const PolyhedronFeatures& f) {
         for (int l = k + 1; l < 6; ++l) {
             const auto ul = static_cast<std::size_t>(l);
             if (!used[ul] && (nk + f.face_normals[ul]).norm() <= tol) {
-                if (axis == 3) {
-                    return std::nullopt;
-                }
                 used[static_cast<std::size_t>(k)] = used[ul] = true;
                 const double ok = f.face_offsets[static_cast<std::size_t>(k)];
                 const double ol = f.face_offsets[ul];
