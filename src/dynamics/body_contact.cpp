@@ -250,7 +250,7 @@ constexpr double kTieBand = 0.02;
 /// Vertices of p (world) within kTieBand * overlap of its support along d, with the weights
 /// w = 1 - (h_max - h_v) / band (> 0 only), appended to `out` (cleared first).
 void near_support(const geometry::PosedPolyhedron& p, const Vec3& d, double overlap,
-                  std::vector<std::pair<Vec3, double>>& out) {
+                  geometry::NearVertices& out) {
     out.clear();
     // In the body frame (d . x = d . p.x + d_body . v): one rotation of d instead of one per
     // vertex; only the vertices in the band are turned to the world frame.
@@ -279,10 +279,9 @@ void near_support(const geometry::PosedPolyhedron& p, const Vec3& d, double over
 /// of its two vertices (continuous into the single vertex as it tilts). Parallel faces keep the
 /// patch centroid `patch_point`: the overlap is not differentiable there.
 /// `va`, `vb`: near_support of a along -m and of b along m.
-Vec3 pair_point(const std::vector<std::pair<Vec3, double>>& va,
-                const std::vector<std::pair<Vec3, double>>& vb, const Vec3& m, double delta,
-                const Vec3& patch_point) {
-    const auto average = [](const std::vector<std::pair<Vec3, double>>& v) {
+Vec3 pair_point(const geometry::NearVertices& va, const geometry::NearVertices& vb, const Vec3& m,
+                double delta, const Vec3& patch_point) {
+    const auto average = [](const geometry::NearVertices& v) {
         Vec3 sum = Vec3::Zero();
         double wsum = 0.0;
         for (const auto& [x, w] : v) {
@@ -333,8 +332,8 @@ Vec3 pair_point(const std::vector<std::pair<Vec3, double>>& va,
 /// As above, the vertices near the supports found here.
 Vec3 pair_point(const geometry::PosedPolyhedron& a, const geometry::PosedPolyhedron& b,
                 const Vec3& m, double delta, const Vec3& patch_point) {
-    thread_local std::vector<std::pair<Vec3, double>> va;
-    thread_local std::vector<std::pair<Vec3, double>> vb;
+    thread_local geometry::NearVertices va;
+    thread_local geometry::NearVertices vb;
     near_support(a, -m, delta, va);
     near_support(b, m, delta, vb);
     return pair_point(va, vb, m, delta, patch_point);
@@ -343,8 +342,7 @@ Vec3 pair_point(const geometry::PosedPolyhedron& a, const geometry::PosedPolyhed
 /// Does pair_point read the patch centroid, given its near_support lists? Only when at least
 /// three vertices of each body lie within the band (two faces parallel within the band);
 /// otherwise it takes vertices or edges and the patch goes unread.
-bool pair_point_needs_patch(const std::vector<std::pair<Vec3, double>>& va,
-                            const std::vector<std::pair<Vec3, double>>& vb) {
+bool pair_point_needs_patch(const geometry::NearVertices& va, const geometry::NearVertices& vb) {
     return va.size() >= 3 && vb.size() >= 3;
 }
 
@@ -385,8 +383,8 @@ ElementContact polyhedron_pair(const Element& a, const Element& b, NarrowPhase m
         sep->setZero();
     }
     geometry::PolyhedronContact pc;
-    thread_local std::vector<std::pair<Vec3, double>> va;
-    thread_local std::vector<std::pair<Vec3, double>> vb;
+    thread_local geometry::NearVertices va;
+    thread_local geometry::NearVertices vb;
     bool near_known = false;                     // va, vb hold the near supports of pc's plane
     bool exact = method != NarrowPhase::gjk_epa; // the fast common plane answers
     if (!exact) {
