@@ -251,23 +251,19 @@ constexpr double kTieBand = 0.02;
 /// w = 1 - (h_max - h_v) / band (> 0 only), appended to `out` (cleared first).
 void near_support(const geometry::PosedPolyhedron& p, const Vec3& d, double overlap,
                   geometry::NearVertices& out) {
-    out.clear();
     // In the body frame (d . x = d . p.x + d_body . v): one rotation of d instead of one per
-    // vertex; only the vertices in the band are turned to the world frame.
+    // vertex; only the vertices in the band are turned to the world frame (band_vertices, the
+    // rule the common plane's own lists follow).
     const Vec3 db = p.q.conjugate() * d;
+    const std::vector<Vec3>& vs = p.shape->vertices;
+    thread_local std::vector<double> h;
+    h.resize(vs.size());
     double top = -std::numeric_limits<double>::infinity();
-    for (const Vec3& v : p.shape->vertices) {
-        top = std::max(top, db.dot(v));
+    for (std::size_t i = 0; i < vs.size(); ++i) {
+        h[i] = db.dot(vs[i]);
+        top = std::max(top, h[i]);
     }
-    const double band = kTieBand * overlap;
-    for (const Vec3& v : p.shape->vertices) {
-        // below < band exactly when the rounded 1 - below / band is positive (band > 0: a
-        // quotient below 1 rounds to at most 1 - 2^-53), so the division runs only in the band.
-        const double below = top - db.dot(v);
-        if (below < band) {
-            out.emplace_back(p.x + p.q * v, 1.0 - below / band);
-        }
-    }
+    geometry::band_vertices(p, h.data(), top, 1.0, kTieBand * overlap, out);
 }
 
 /// Contact point of two polyhedra with overlap delta along the unit normal m (from b to a): a

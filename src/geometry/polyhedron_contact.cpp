@@ -101,6 +101,20 @@ std::optional<PolyhedronFeatures::Box> box_of(const PolyhedronFeatures& f) {
 
 } // namespace
 
+void band_vertices(const PosedPolyhedron& p, const double* h, double top, double sign, double band,
+                   NearVertices& out) {
+    out.clear();
+    const std::vector<Vec3>& vs = p.shape->vertices;
+    for (std::size_t i = 0; i < vs.size(); ++i) {
+        // below < band exactly when the rounded 1 - below / band is positive (band > 0: a
+        // quotient below 1 rounds to at most 1 - 2^-53), so the division runs only in the band.
+        const double below = sign * (top - h[i]);
+        if (below < band) {
+            out.emplace_back(p.x + p.q * vs[i], 1.0 - below / band);
+        }
+    }
+}
+
 PolyhedronFeatures polyhedron_features(const ConvexPolyhedron& p) {
     PolyhedronFeatures f;
     f.vertices = p.vertices;
@@ -381,21 +395,8 @@ PlaneDepth plane_depth(const PolyhedronFeatures& fa, const Relative& r, const Ve
 void near_band(const PosedPolyhedron& a, const PosedPolyhedron& b, const PlaneDepth& pd,
                const double* ha, const double* hb, const NearBand& near) {
     const double band = near.fraction * (pd.d_b - pd.d_a);
-    const auto fill = [band](const PosedPolyhedron& p, const double* h, double top, double sign,
-                             NearVertices& out) {
-        out.clear();
-        const std::vector<Vec3>& vs = p.shape->vertices;
-        for (std::size_t i = 0; i < vs.size(); ++i) {
-            // below < band exactly when the rounded 1 - below / band is positive (band > 0),
-            // so the division runs only in the band.
-            const double below = sign * (top - h[i]);
-            if (below < band) {
-                out.emplace_back(p.x + p.q * vs[i], 1.0 - below / band);
-            }
-        }
-    };
-    fill(a, ha, pd.d_a, -1.0, *near.a);
-    fill(b, hb, pd.d_b, 1.0, *near.b);
+    band_vertices(a, ha, pd.d_a, -1.0, band, *near.a);
+    band_vertices(b, hb, pd.d_b, 1.0, band, *near.b);
 }
 
 /// Points and patch for the normal m (unit, from B to A), all in A's body frame; the result's

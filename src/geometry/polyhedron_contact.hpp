@@ -183,6 +183,14 @@ struct PlaneMemo {
 /// Vertices of a body near its support plane: world position (m) and weight (-), see NearBand.
 using NearVertices = std::vector<std::pair<Vec3, double>>;
 
+/// The band rule of NearBand for one body p: its vertices whose heights h (m, one per vertex of
+/// p's shape, in its order, along some direction from any common origin) lie within `band`
+/// (m, > 0) of the extreme `top` (sign = +1: the highest, below = top - h; -1: the lowest,
+/// below = h - top), appended to `out` (cleared first) in the order of the vertices, each at its
+/// world position (m) with the weight 1 - below / band (> 0).
+void band_vertices(const PosedPolyhedron& p, const double* h, double top, double sign, double band,
+                   NearVertices& out);
+
 /// The vertices of each body within a band of its support plane along the common plane's normal,
 /// filled by polyhedron_contact_point before it calls the patch test of a touching pair: `a` gets
 /// A's vertices whose height along -normal lies within fraction * depth of A's largest, `b`
