@@ -89,14 +89,42 @@ std::optional<PolyhedronFeatures::Box> box_of(const PolyhedronFeatures& f) {
             }
         }
     }
-    for (const Vec3& v : f.vertices) {
-        for (int i = 0; i < 3; ++i) {
-            if (std::abs(std::abs(b.axes.col(i).dot(v)) - b.half[i]) > tol * f.radius) {
-                return std::nullopt;
+    // Every vertex on a corner: its heights along the axes are the half extents.
+    const auto corners = [&f](const PolyhedronFeatures::Box& box) {
+        for (const Vec3& v : f.vertices) {
+            for (int i = 0; i < 3; ++i) {
+                if (std::abs(std::abs(box.axes.col(i).dot(v)) - box.half[i]) > tol * f.radius) {
+                    return false;
+                }
             }
         }
+        return true;
+    };
+    if (!corners(b)) {
+        return std::nullopt;
     }
-    return b;
+    // Faces along the body frame's axes (a mesh drawn axis-aligned; the hull's normals may carry
+    // round-off of 1e-16): the axes become the identity, column k along e_k, each axis's faces
+    // swapped where its normal points along -e_k.
+    PolyhedronFeatures::Box id;
+    id.axes = Mat3::Identity();
+    // (Orthogonal axes each within tol of some +-e_k take distinct k.)
+    for (int i = 0; i < 3; ++i) {
+        const Vec3 n = b.axes.col(i);
+        int k = 0;
+        n.cwiseAbs().maxCoeff(&k);
+        const double sign = n[k] > 0.0 ? 1.0 : -1.0;
+        const auto uk = static_cast<std::size_t>(k);
+        if ((n - sign * Vec3::Unit(k)).norm() > tol) {
+            return b;
+        }
+        const auto ui = static_cast<std::size_t>(i);
+        id.half[k] = b.half[i];
+        id.plus[uk] = sign > 0.0 ? b.plus[ui] : b.minus[ui];
+        id.minus[uk] = sign > 0.0 ? b.minus[ui] : b.plus[ui];
+    }
+    id.aligned = true;
+    return corners(id) ? id : b;
 }
 
 } // namespace
@@ -826,8 +854,11 @@ void box_plane(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const
                double& best, Vec3& best_m, PolyhedronContact& c) {
     const PolyhedronFeatures::Box& ba = *fa.box;
     const PolyhedronFeatures::Box& bb = *fb.box;
-    const Mat3 cm = ba.axes.transpose() * (r.rot * bb.axes); // B's axes in A's box frame
-    const Vec3 t = ba.axes.transpose() * r.shift;
+    // B's axes in A's box frame, B's centre there (m): for two boxes along their bodies' axes
+    // the relative pose as it is.
+    const bool turned = !ba.aligned || !bb.aligned;
+    const Mat3 cm = turned ? Mat3(ba.axes.transpose() * (r.rot * bb.axes)) : r.rot;
+    const Vec3 t = turned ? Vec3(ba.axes.transpose() * r.shift) : r.shift;
     const Mat3 ac = cm.cwiseAbs();
     const Vec3& ha = ba.half;
     const Vec3& hb = bb.half;

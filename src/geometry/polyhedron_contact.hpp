@@ -59,6 +59,10 @@ struct PolyhedronFeatures {
         Vec3 half; ///< half extents along the columns of axes (m)
         std::array<int, 3> plus;  ///< face index whose normal is axes.col(i)
         std::array<int, 3> minus; ///< face index whose normal is -axes.col(i)
+        /// The faces' normals are the body frame's axes (each within 1e-12 of +-e_k): axes is
+        /// then exactly the identity (column k along e_k, plus[k] the face along +e_k), and B's
+        /// pose needs no turning into the box frames.
+        bool aligned = false;
     };
     /// Set by polyhedron_features when the polyhedron is a box to 1e-12 of its radius (face
     /// normals opposite and orthogonal, every vertex on a corner); empty for other shapes.
