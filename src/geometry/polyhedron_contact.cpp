@@ -47,7 +47,8 @@ int find_root(std::vector<int>& parent, int i) {
 /// The box of a polyhedron's features (PolyhedronFeatures::box), or none: six faces in three
 /// opposite pairs with orthogonal normals, each pair at equal offsets, and eight vertices each on
 /// a corner, all to 1e-12 (of 1 for the normals, of the radius for lengths). The closed-form
-/// common plane then differs from the general one by round-off of that order.
+/// common plane then differs from the general one by round-off of that order. Axes along the body
+/// frame's (to 1e-12) are taken as the identity (Box::aligned).
 std::optional<PolyhedronFeatures::Box> box_of(const PolyhedronFeatures& f) {
     constexpr double tol = 1e-12;
     if (f.face_normals.size() != 6 || f.vertices.size() != 8 || f.edges.size() != 12) {

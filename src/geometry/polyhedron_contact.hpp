@@ -57,8 +57,8 @@ struct PolyhedronFeatures {
     struct Box {
         Mat3 axes; ///< columns: unit normals of three faces, one per pair (body frame)
         Vec3 half; ///< half extents along the columns of axes (m)
-        std::array<int, 3> plus;  ///< face index whose normal is axes.col(i)
-        std::array<int, 3> minus; ///< face index whose normal is -axes.col(i)
+        std::array<int, 3> plus;  ///< face index whose normal is axes.col(i) (to 1e-12)
+        std::array<int, 3> minus; ///< face index whose normal is -axes.col(i) (to 1e-12)
         /// The faces' normals are the body frame's axes (each within 1e-12 of +-e_k): axes is
         /// then exactly the identity (column k along e_k, plus[k] the face along +e_k), and B's
         /// pose needs no turning into the box frames.
