@@ -3,7 +3,8 @@
 // fast common plane with and without the points and patch, libccd GJK + EPA and MPR; a
 // sphere-sphere overlap for comparison; mesh-wall queries of a sphere and a cube; a polyhedron
 // against a superquadric by libccd's EPA alone and with the normal's refinement
-// (depth_refinement.hpp, as the contact of such a pair runs it). Run:
+// (depth_refinement.hpp, as the contact of such a pair runs it); two cubes whose box axes are
+// not their body frame's (`cube_turned_plane`, beside `cube_plane`). Run:
 // build/bench/kiln_bench_polyhedra
 
 #include "geometry/convex_contact.hpp"
@@ -17,6 +18,7 @@
 #include <cmath>
 #include <map>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace {
@@ -25,14 +27,25 @@ using kiln::Quat;
 using kiln::Vec3;
 namespace g = kiln::geometry;
 
+/// A shipped polyhedron by name; "NAME_turned": its vertices turned by a fixed rotation (the same
+/// solid, a box no longer along its body frame's axes: PolyhedronFeatures::Box::aligned false).
 const g::PolyhedronFeatures& shape(const std::string& name) {
     static std::map<std::string, g::PolyhedronFeatures> cache;
     auto it = cache.find(name);
     if (it == cache.end()) {
+        const std::string suffix = "_turned";
+        const bool turned = name.size() > suffix.size() && name.ends_with(suffix);
         const auto t = kiln::io::read_shape_file(
-            kiln::io::find_shape_file(name, kiln::io::default_shape_dirs()));
-        it = cache.emplace(name, g::polyhedron_features(std::get<g::ConvexPolyhedron>(t.shape)))
-                 .first;
+            kiln::io::find_shape_file(turned ? name.substr(0, name.size() - suffix.size()) : name,
+                                      kiln::io::default_shape_dirs()));
+        g::ConvexPolyhedron p = std::get<g::ConvexPolyhedron>(t.shape);
+        if (turned) {
+            const kiln::Mat3 turn = Quat(0.9, 0.3, -0.2, 0.25).normalized().toRotationMatrix();
+            for (Vec3& v : p.vertices) {
+                v = turn * v;
+            }
+        }
+        it = cache.emplace(name, g::polyhedron_features(p)).first;
     }
     return it->second;
 }
@@ -223,6 +236,7 @@ BENCHMARK_CAPTURE(run, pyramid_mpr, std::string("pyramid"), Method::kMpr);
 BENCHMARK_CAPTURE(run, cube_plane, std::string("cube"), Method::kPlane);
 BENCHMARK_CAPTURE(run, cube_plane_patch, std::string("cube"), Method::kPlanePatch);
 BENCHMARK_CAPTURE(run, cube_plane_general, std::string("cube"), Method::kPlaneGeneral);
+BENCHMARK_CAPTURE(run, cube_turned_plane, std::string("cube_turned"), Method::kPlane);
 BENCHMARK_CAPTURE(run, cube_epa, std::string("cube"), Method::kEpa);
 BENCHMARK_CAPTURE(run, cube_mpr, std::string("cube"), Method::kMpr);
 BENCHMARK_CAPTURE(run, plate_plane, std::string("plate_10x9x2"), Method::kPlane);
