@@ -150,6 +150,10 @@ enum class FaceScan {
 [[nodiscard]] PolyhedronContact polyhedron_contact_with(const PosedPolyhedron& a,
                                                         const PosedPolyhedron& b, FaceScan scan,
                                                         bool with_patch = true);
+/// How many faces of each body a memory refilled in this thread lists (PlaneMemo::top_a), at
+/// most PlaneMemo::kTopFaces (the default): tests shorten the list so that the faces beyond it
+/// decide often. The answers are the same bits for any length.
+int& memo_listed_faces();
 } // namespace detail
 
 /// Memory of one pair's common plane between steps (temporal coherence of a resting contact).
@@ -176,6 +180,16 @@ struct PlaneMemo {
     std::vector<double> values;
     int inside = -1; ///< a vertex strictly inside the other body: B's j as j, A's i as nv_B + i
     int cross = -1;  ///< an edge found crossing the other body: A's e as e, B's as ne_A + e
+    /// Faces listed by their stored separations, so that the search meets the faces that can
+    /// win first and stops at the first one ruled out: top_a holds the kTopFaces faces of A with
+    /// the largest stored separations (fewer with detail::memo_listed_faces), largest first
+    /// (equal values: lower index first), -1 past them; rest_a is the largest stored separation
+    /// of A's other faces (m; -infinity: none). top_b and rest_b the same for B.
+    static constexpr std::size_t kTopFaces = 4;
+    std::array<int, kTopFaces> top_a{};
+    std::array<int, kTopFaces> top_b{};
+    double rest_a = 0.0;
+    double rest_b = 0.0;
 };
 
 /// As polyhedron_contact with `need_patch`, with the pair's memory `memo` (read and written; see
@@ -224,6 +238,9 @@ struct PlaneMemoCounters {
     long tried = 0;    ///< queries with a valid memory
     long answered = 0; ///< of which the memory's route gave the answer
     long refills = 0;  ///< full searches that refilled a memory
+    /// Of the answered, those whose plane is a face the memory did not list among its first
+    /// (PlaneMemo::top_a, top_b): found among the rest.
+    long unlisted = 0;
 };
 /// This thread's counters (mutable, for resetting).
 PlaneMemoCounters& plane_memo_counters();

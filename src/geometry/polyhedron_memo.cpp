@@ -6,11 +6,13 @@
 #include "geometry/polyhedron_search.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 namespace kiln::geometry {
@@ -52,6 +54,97 @@ double largest_of_pair_minima(const double* d0, const double* d1, std::size_t n)
         h0 = std::max(h0, std::min(d0[k], d1[k]));
     }
     return std::max(std::max(h0, h1), std::max(h2, h3));
+}
+
+/// The faces of the largest stored separations `stored` (nf of them), largest first, equal
+/// values by index, into `top` (-1 past nf), and the largest of the rest into `rest`
+/// (-infinity: none); see PlaneMemo::top_a.
+void rank_faces(const double* stored, std::size_t nf, std::array<int, PlaneMemo::kTopFaces>& top,
+                double& rest) {
+    thread_local std::vector<int> order;
+    order.resize(nf);
+    for (std::size_t k = 0; k < nf; ++k) {
+        order[k] = static_cast<int>(k);
+    }
+    const auto length = static_cast<std::size_t>(
+        std::clamp(detail::memo_listed_faces(), 1, static_cast<int>(PlaneMemo::kTopFaces)));
+    const std::size_t sorted = std::min(nf, length + 1);
+    std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(sorted),
+                      order.end(), [stored](int i, int j) {
+                          const double si = stored[static_cast<std::size_t>(i)];
+                          const double sj = stored[static_cast<std::size_t>(j)];
+                          return si > sj || (si == sj && i < j);
+                      });
+    top.fill(-1);
+    for (std::size_t i = 0; i < std::min(nf, length); ++i) {
+        top[i] = order[i];
+    }
+    rest = nf > length ? stored[static_cast<std::size_t>(order[length])]
+                       : -std::numeric_limits<double>::infinity();
+}
+
+/// One face stage of the memory's search: the separations (m) of the faces of one body that can
+/// be the largest, as face_separations gives them, into `met` as (face, separation) in the order
+/// evaluated. The faces go in the memory's order (top, then the rest by index when rest's bound
+/// reaches the bar); the first always, every other one unless its bound (stored value + drift +
+/// 2 tol) lies below the bar, the largest of `floor` (m, a value the answer reaches) and the
+/// separations met. Listed by their stored values, the first one ruled out ends the list (the
+/// bounds keep the order). `separation(k)` evaluates face k.
+template <class Separation>
+void memo_faces(const std::array<int, PlaneMemo::kTopFaces>& top, double rest, const double* stored,
+                std::size_t nf, double drift, double tol, double floor, Separation&& separation,
+                std::vector<std::pair<int, double>>& met) {
+    met.clear();
+    double bar = floor;
+    for (std::size_t i = 0; i < top.size(); ++i) {
+        const int k = top[i];
+        if (k < 0) {
+            break; // past the list (rest: the faces not listed, -infinity when none)
+        }
+        if (i > 0 && stored[static_cast<std::size_t>(k)] + drift + 2.0 * tol < bar) {
+            return;
+        }
+        const double s = separation(static_cast<std::size_t>(k));
+        met.emplace_back(k, s);
+        bar = std::max(bar, s);
+    }
+    if (rest + drift + 2.0 * tol < bar) {
+        return;
+    }
+    for (std::size_t k = 0; k < nf; ++k) {
+        const bool listed = std::find(top.begin(), top.end(), static_cast<int>(k)) != top.end();
+        if (!listed && !(stored[k] + drift + 2.0 * tol < bar)) {
+            const double s = separation(k);
+            met.emplace_back(static_cast<int>(k), s);
+            bar = std::max(bar, s);
+        }
+    }
+}
+
+/// Raises top (m) to the largest separation in `met` and face to its face + base, and second to
+/// the largest of the other values met (top's old value among them when raised). A value equal
+/// to top does not raise it but becomes second: a tie, which the search declines (the full
+/// search then decides between the faces), so the order the faces were met in does not matter.
+void take_faces(const std::vector<std::pair<int, double>>& met, int base, double& top, int& face,
+                double& second) {
+    std::size_t win = met.size();
+    double value = top;
+    for (std::size_t i = 0; i < met.size(); ++i) {
+        if (met[i].second > value) {
+            win = i;
+            value = met[i].second;
+        }
+    }
+    for (std::size_t i = 0; i < met.size(); ++i) {
+        if (i != win) {
+            second = std::max(second, met[i].second);
+        }
+    }
+    if (win < met.size()) {
+        second = std::max(second, top);
+        top = value;
+        face = base + met[win].first;
+    }
 }
 
 /// Is the memory's certificate vertex still inside the other body by more than tol (m)? (B's
@@ -141,6 +234,8 @@ void refill_memo(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, con
     };
     columns(dist_b, nfa, memo.values.data());
     columns(dist_a, nfb, memo.values.data() + nfa);
+    rank_faces(memo.values.data(), nfa, memo.top_a, memo.rest_a);
+    rank_faces(memo.values.data() + nfa, nfb, memo.top_b, memo.rest_b);
     // Per edge, the larger of the prune's two distances: beyond one face plane of the other body
     // (the larger over the planes of the nearer end's distance), and beyond its bounding sphere.
     const auto edge_reach = [](const std::vector<std::array<int, 4>>& edges,
@@ -218,59 +313,29 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
         return false;
     }
     const double floor = memo.answer - std::min(drift_a, drift_b) - tol; // <= the answer
-    thread_local std::vector<double> sep;
-    thread_local std::vector<double> bound;
+    thread_local std::vector<std::pair<int, double>> met;
     double second = -std::numeric_limits<double>::infinity();
     const std::size_t nfa = fa.face_normals.size();
     const std::size_t nfb = fb.face_normals.size();
-    // Faces of A: a face is evaluated unless its bound (stored value, drift, round-off of the
-    // stored value, and the tie margin) lies below the running lower bound of the answer.
-    PlaneDistances tb(fa.face_normals, fa.face_offsets, r.vb, r.dist_b);
-    bound.resize(nfa);
-    for (std::size_t k = 0; k < nfa; ++k) {
-        bound[k] = memo.values[k] + drift_b + 2.0 * tol;
-    }
-    face_separations(tb, bound, floor, sep);
-    // The running values in locals (through the references they were stored at every face).
     c.iterations += static_cast<int>(nfa + nfb);
     int face = -1; // the face that raised the best last (A's k as k, B's as nfa + k)
     double top = best;
-    {
-        double run = second;
-        for (std::size_t k = 0; k < nfa; ++k) {
-            if (sep[k] > top) {
-                run = top;
-                top = sep[k];
-                face = static_cast<int>(k);
-            } else {
-                run = std::max(run, sep[k]);
-            }
-        }
-        second = run;
-    }
+    // Faces of A: evaluated unless their bound (stored value, drift, round-off of the stored
+    // value, and the tie margin) lies below the running lower bound of the answer.
+    PlaneDistances tb(fa.face_normals, fa.face_offsets, r.vb, r.dist_b);
+    memo_faces(
+        memo.top_a, memo.rest_a, memo.values.data(), nfa, drift_b, tol, floor,
+        [&tb](std::size_t k) { return tb.separation(k); }, met);
+    take_faces(met, 0, top, face, second);
     if (!(top < -tol)) {
         return false;
     }
     relative_faces(fb, r);
     PlaneDistances ta(r.nb, r.ob, fa.vertices, r.dist_a);
-    bound.resize(nfb);
-    for (std::size_t k = 0; k < nfb; ++k) {
-        bound[k] = memo.values[nfa + k] + drift_a + 2.0 * tol;
-    }
-    face_separations(ta, bound, std::max(floor, top), sep);
-    {
-        double run = second;
-        for (std::size_t k = 0; k < nfb; ++k) {
-            if (sep[k] > top) {
-                run = top;
-                top = sep[k];
-                face = static_cast<int>(nfa + k);
-            } else {
-                run = std::max(run, sep[k]);
-            }
-        }
-        second = run;
-    }
+    memo_faces(
+        memo.top_b, memo.rest_b, memo.values.data() + nfa, nfb, drift_a, tol, std::max(floor, top),
+        [&ta](std::size_t k) { return ta.separation(k); }, met);
+    take_faces(met, static_cast<int>(nfa), top, face, second);
     best = top;
     if (face >= 0 && static_cast<std::size_t>(face) < nfa) {
         best_m = -fa.face_normals[static_cast<std::size_t>(face)];
@@ -325,6 +390,14 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
         return false;
     }
     ++memo_counters.answered;
+    if (c.feature != CommonPlaneFeature::kEdgeEdge && face >= 0) {
+        const bool of_a = static_cast<std::size_t>(face) < nfa;
+        const auto& top_list = of_a ? memo.top_a : memo.top_b;
+        const int k = of_a ? face : face - static_cast<int>(nfa);
+        if (std::find(top_list.begin(), top_list.end(), k) == top_list.end()) {
+            ++memo_counters.unlisted;
+        }
+    }
     return true;
 }
 
@@ -333,5 +406,12 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
 PlaneMemoCounters& plane_memo_counters() {
     return memo_counters;
 }
+
+namespace detail {
+int& memo_listed_faces() {
+    thread_local int length = static_cast<int>(PlaneMemo::kTopFaces);
+    return length;
+}
+} // namespace detail
 
 } // namespace kiln::geometry

@@ -871,7 +871,9 @@ TEST(PolyhedronContact, NearBandListsTheVerticesNearEachSupport) {
     EXPECT_GT(many, 100);
 }
 
-TEST(PolyhedronContact, MemoryChangesNoBit) {
+/// The trajectories of MemoryChangesNoBit with the memory listing `listed` faces of each body
+/// (detail::memo_listed_faces); returns the counters' change over them.
+g::PlaneMemoCounters memory_trajectories(int listed) {
     // A pair's memory of its last search (PlaneMemo) along random trajectories of touching pairs:
     // steps of 1e-8 to 3e-3 of the size, translation and rotation, so that the memory is read
     // with tight and loose bounds, refilled when the pair has moved too far, and meets pairs that
@@ -879,6 +881,8 @@ TEST(PolyhedronContact, MemoryChangesNoBit) {
     // point, points, patch), with the patch asked for and not; the aligned cube stacks give
     // face-on-face contacts with near ties. The same through polyhedron_contact_point (its own
     // memory), which leaves the points and the patch polygon empty.
+    const int listed_before = g::detail::memo_listed_faces();
+    g::detail::memo_listed_faces() = listed;
     std::mt19937_64 rng(53);
     std::vector<g::PolyhedronFeatures> shapes;
     for (const std::string name :
@@ -924,12 +928,30 @@ TEST(PolyhedronContact, MemoryChangesNoBit) {
             }
         }
     }
+    g::detail::memo_listed_faces() = listed_before;
     const g::PlaneMemoCounters& after = g::plane_memo_counters();
-    const long answered = after.answered - before.answered;
-    std::printf("%d touching, memory tried %ld, answered %ld, refilled %ld\n", touching,
-                after.tried - before.tried, answered, after.refills - before.refills);
+    std::printf("%d faces listed: %d touching, memory tried %ld, answered %ld (%ld on a face "
+                "beyond its list), refilled %ld\n",
+                listed, touching, after.tried - before.tried, after.answered - before.answered,
+                after.unlisted - before.unlisted, after.refills - before.refills);
     EXPECT_GT(touching, 10000);
-    EXPECT_GT(answered, touching / 2); // the memory's route is exercised, not only the fallback
+    return {after.tried - before.tried, after.answered - before.answered,
+            after.refills - before.refills, after.unlisted - before.unlisted};
+}
+
+TEST(PolyhedronContact, MemoryChangesNoBit) {
+    const g::PlaneMemoCounters n = memory_trajectories(g::PlaneMemo::kTopFaces);
+    EXPECT_GT(n.answered, 10000 / 2); // the memory's route is exercised, not only the fallback
+}
+
+TEST(PolyhedronContact, MemoryWithAShortListChangesNoBit) {
+    // The memory lists the faces of the largest stored separations first and searches the others
+    // only when their bound reaches the answer; with the default list the plane is almost always
+    // a listed face (the faces' separations move by at most the drift since the refill). With one
+    // face listed the faces beyond decide often, and the answers stay the full search's.
+    const g::PlaneMemoCounters n = memory_trajectories(1);
+    EXPECT_GT(n.answered, 10000 / 2);
+    EXPECT_GT(n.unlisted, 100);
 }
 
 TEST(SeparatingAxis, PolyhedronOverlapFromHeightsAgreesWithTheSupportForm) {
