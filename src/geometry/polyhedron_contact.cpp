@@ -234,24 +234,41 @@ void make_relative(const PosedPolyhedron& a, const PosedPolyhedron& b, Relative&
     for (std::size_t j = 0; j < fb.vertices.size(); ++j) {
         r.vb[j] = r.rot * fb.vertices[j] + r.shift;
     }
-}
-
-/// B's face planes in A's frame (after make_relative).
-void relative_faces(const PolyhedronFeatures& fb, Relative& r) {
-    r.faces = true;
-    r.nb.resize(fb.face_normals.size());
-    r.ob.resize(fb.face_normals.size());
-    for (std::size_t k = 0; k < fb.face_normals.size(); ++k) {
-        r.nb[k] = r.rot * fb.face_normals[k];
-        r.ob[k] = fb.face_offsets[k] + r.nb[k].dot(r.shift);
+    // A new pose: no plane of B turned yet (the numbers restart after 2^32 - 1 poses).
+    const std::size_t nfb = fb.face_normals.size();
+    r.nb.resize(nfb);
+    r.ob.resize(nfb);
+    r.face_pose.resize(nfb, 0);
+    if (++r.pose == 0) {
+        std::fill(r.face_pose.begin(), r.face_pose.end(), 0U);
+        r.pose = 1;
     }
 }
 
-/// The Gauss-map arcs of B's kept edges (after relative_faces and the prune).
+[[gnu::noinline]] void relative_face(const PolyhedronFeatures& fb, Relative& r, std::size_t k) {
+    r.nb[k] = r.rot * fb.face_normals[k];
+    r.ob[k] = fb.face_offsets[k] + r.nb[k].dot(r.shift);
+    r.face_pose[k] = r.pose;
+}
+
+/// B's face planes in A's frame (after make_relative): those not turned yet.
+void relative_faces(const PolyhedronFeatures& fb, Relative& r) {
+    if (r.faces) {
+        return;
+    }
+    r.faces = true;
+    for (std::size_t k = 0; k < fb.face_normals.size(); ++k) {
+        need_face(fb, r, k);
+    }
+}
+
+/// The Gauss-map arcs of B's kept edges (after the prune; turns the planes they read).
 void relative_arcs(const PolyhedronFeatures& fb, Relative& r) {
     r.arcs.resize(fb.edges.size());
     for (const int e : r.edges_b) {
         const auto k = static_cast<std::size_t>(e);
+        need_face(fb, r, static_cast<std::size_t>(fb.edges[k][2]));
+        need_face(fb, r, static_cast<std::size_t>(fb.edges[k][3]));
         const Vec3 c = -r.nb[static_cast<std::size_t>(fb.edges[k][2])];
         const Vec3 d = -r.nb[static_cast<std::size_t>(fb.edges[k][3])];
         r.arcs[k] = {c, d, d.cross(c)};
@@ -476,9 +493,7 @@ PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b,
     raw.clear();
     pts.clear();
     if (!point_only || !has_patch) {
-        if (!r.faces) {
-            relative_faces(fb, r); // (two boxes' closed form leaves B's planes to here)
-        }
+        relative_faces(fb, r); // (the boxes' closed form and the memory turn only a few)
         const auto clip_a = [&](const std::array<int, 4>& e) {
             clip_edge(fa.vertices[static_cast<std::size_t>(e[0])],
                       fa.vertices[static_cast<std::size_t>(e[1])], r.nb, r.ob, raw);

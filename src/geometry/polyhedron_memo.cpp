@@ -147,9 +147,10 @@ void take_faces(const std::vector<std::pair<int, double>>& met, int base, double
     }
 }
 
-/// Is the memory's certificate vertex still inside the other body by more than tol (m)? (B's
-/// planes in r: relative_faces done; -1: no vertex.)
-bool memo_inside(const PolyhedronFeatures& fa, const Relative& r, int vertex, double tol) {
+/// Is the memory's certificate vertex still inside the other body by more than tol (m)? (-1: no
+/// vertex.)
+bool memo_inside(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Relative& r,
+                 int vertex, double tol) {
     const auto nvb = static_cast<int>(r.vb.size());
     if (vertex < 0) {
         return false;
@@ -163,6 +164,7 @@ bool memo_inside(const PolyhedronFeatures& fa, const Relative& r, int vertex, do
         }
         return true;
     }
+    relative_faces(fb, r);
     const Vec3 x = fa.vertices[static_cast<std::size_t>(vertex - nvb)];
     for (std::size_t k = 0; k < r.nb.size(); ++k) {
         if (!(r.nb[k].dot(x) - r.ob[k] < -tol)) {
@@ -175,27 +177,34 @@ bool memo_inside(const PolyhedronFeatures& fa, const Relative& r, int vertex, do
 /// Does an edge cross the other body (the full search's second certificate)? The edge that did
 /// at the last query first, then the kept ones in r (A's, then B's); the one found is kept in
 /// memo.cross (A's edge e as e, B's as the count of A's edges + e).
-bool memo_crossing(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const Relative& r,
+bool memo_crossing(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Relative& r,
                    PlaneMemo& memo) {
+    // B's edges are tested against A's own planes, A's against all of B's planes turned into A's
+    // frame: B's first, so that a query certified by one of them turns no more of B's planes.
     thread_local std::vector<int> one(1);
     const auto nea = static_cast<int>(fa.edges.size());
-    if (memo.cross >= 0) {
-        one[0] = memo.cross < nea ? memo.cross : memo.cross - nea;
-        if (memo.cross < nea
-                ? edge_crosses(fa.edges, one, fa.vertices, r.nb, r.ob) >= 0
-                : edge_crosses(fb.edges, one, r.vb, fa.face_normals, fa.face_offsets) >= 0) {
+    if (memo.cross >= nea) {
+        one[0] = memo.cross - nea;
+        if (edge_crosses(fb.edges, one, r.vb, fa.face_normals, fa.face_offsets) >= 0) {
             return true;
         }
     }
-    int e = edge_crosses(fa.edges, r.edges_a, fa.vertices, r.nb, r.ob);
-    if (e < 0) {
-        e = edge_crosses(fb.edges, r.edges_b, r.vb, fa.face_normals, fa.face_offsets);
-        e = e < 0 ? -1 : nea + e;
+    int e = edge_crosses(fb.edges, r.edges_b, r.vb, fa.face_normals, fa.face_offsets);
+    if (e >= 0) {
+        memo.cross = nea + e;
+        return true;
     }
+    relative_faces(fb, r);
+    if (memo.cross >= 0 && memo.cross < nea) {
+        one[0] = memo.cross;
+        if (edge_crosses(fa.edges, one, fa.vertices, r.nb, r.ob) >= 0) {
+            return true;
+        }
+    }
+    e = edge_crosses(fa.edges, r.edges_a, fa.vertices, r.nb, r.ob);
     memo.cross = e;
     return e >= 0;
 }
-
 } // namespace
 
 namespace search {
@@ -254,7 +263,8 @@ void refill_memo(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, con
     edge_reach(fa.edges, fa.vertices, dist_a, nfb, r.shift, fb.radius, stored_edges);
     edge_reach(fb.edges, r.vb, dist_b, nfa, Vec3::Zero(), fa.radius,
                stored_edges + fa.edges.size());
-    // The vertex deepest inside the other body (smallest largest distance), B's first.
+    // The vertex deepest inside the other body (smallest largest distance): B's if one of B's is
+    // inside (tested later against A's own planes), else A's (against B's planes turned).
     const double tol = kMemoTolerance * (fa.radius + fb.radius);
     double deepest = -tol;
     memo.inside = -1;
@@ -271,7 +281,9 @@ void refill_memo(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, con
         }
     };
     scan(dist_b, nfa, r.vb.size(), 0);
-    scan(dist_a, nfb, fa.vertices.size(), static_cast<int>(r.vb.size()));
+    if (memo.inside < 0) {
+        scan(dist_a, nfb, fa.vertices.size(), static_cast<int>(r.vb.size()));
+    }
     memo.valid = true;
     memo.fa = &fa;
     memo.fb = &fb;
@@ -330,11 +342,15 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
     if (!(top < -tol)) {
         return false;
     }
-    relative_faces(fb, r);
+    // Faces of B: only the planes evaluated are turned into A's frame (make_relative sized them).
     PlaneDistances ta(r.nb, r.ob, fa.vertices, r.dist_a);
     memo_faces(
         memo.top_b, memo.rest_b, memo.values.data() + nfa, nfb, drift_a, tol, std::max(floor, top),
-        [&ta](std::size_t k) { return ta.separation(k); }, met);
+        [&](std::size_t k) {
+            need_face(fb, r, k);
+            return ta.separation(k);
+        },
+        met);
     take_faces(met, static_cast<int>(nfa), top, face, second);
     best = top;
     if (face >= 0 && static_cast<std::size_t>(face) < nfa) {
@@ -386,7 +402,7 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
     // The certificate of overlap: the stored vertex, else a kept edge crossing the other body
     // (edge_crosses as the full search calls it: a crossing edge passes within the reach of the
     // other body, so the full prune keeps it too, and the same expression gives the same answer).
-    if (!memo_inside(fa, r, memo.inside, tol) && !memo_crossing(fa, fb, r, memo)) {
+    if (!memo_inside(fa, fb, r, memo.inside, tol) && !memo_crossing(fa, fb, r, memo)) {
         return false;
     }
     ++memo_counters.answered;

@@ -43,7 +43,12 @@ struct Relative {
     std::vector<int> edges_a, edges_b; // feature edges kept for the edge-edge stage
     bool pruned = false;               // edges_a/edges_b are valid for this pose
     bool faces = false;                // nb/ob are valid for this pose (relative_faces)
-    bool full_tables = false;          // dist_b and dist_a hold every distance (full search)
+    // The pose's number (make_relative counts them; 0 is never one), and per face of B the
+    // number of the pose its entries of nb/ob were turned for (relative_face): a search that
+    // reads a few of B's planes turns only those.
+    std::uint32_t pose = 0;
+    std::vector<std::uint32_t> face_pose;
+    bool full_tables = false; // dist_b and dist_a hold every distance (full search)
 };
 
 /// Signed distances (m) of the vertices `v` of one body beyond the face planes (n, o) of the
@@ -189,10 +194,21 @@ class PlaneDistances {
 /// B's pose and vertices in A's frame (enough for A's face stage, which rejects most near misses).
 void make_relative(const PosedPolyhedron& a, const PosedPolyhedron& b, Relative& r);
 
-/// B's face planes in A's frame (after make_relative).
+/// B's face plane k in A's frame (after make_relative): r.nb[k] and r.ob[k]. One function for
+/// every caller (not inlined), so that a plane turned alone has the bits of one turned with all.
+void relative_face(const PolyhedronFeatures& fb, Relative& r, std::size_t k);
+
+/// B's face plane k in A's frame unless it is turned for this pose already.
+inline void need_face(const PolyhedronFeatures& fb, Relative& r, std::size_t k) {
+    if (r.face_pose[k] != r.pose) {
+        relative_face(fb, r, k);
+    }
+}
+
+/// B's face planes in A's frame (after make_relative): all of them.
 void relative_faces(const PolyhedronFeatures& fb, Relative& r);
 
-/// The Gauss-map arcs of B's kept edges (after relative_faces and the prune).
+/// The Gauss-map arcs of B's kept edges (after the prune; turns the planes they read).
 void relative_arcs(const PolyhedronFeatures& fb, Relative& r);
 
 /// Squared distance (m^2) from the segment p0-p1 to the point c.

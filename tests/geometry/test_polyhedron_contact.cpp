@@ -872,8 +872,9 @@ TEST(PolyhedronContact, NearBandListsTheVerticesNearEachSupport) {
 }
 
 /// The trajectories of MemoryChangesNoBit with the memory listing `listed` faces of each body
-/// (detail::memo_listed_faces); returns the counters' change over them.
-g::PlaneMemoCounters memory_trajectories(int listed) {
+/// (detail::memo_listed_faces), each memory query after one of the pair the other way round when
+/// `scramble`; returns the counters' change over them.
+g::PlaneMemoCounters memory_trajectories(int listed, bool scramble) {
     // A pair's memory of its last search (PlaneMemo) along random trajectories of touching pairs:
     // steps of 1e-8 to 3e-3 of the size, translation and rotation, so that the memory is read
     // with tight and loose bounds, refilled when the pair has moved too far, and meets pairs that
@@ -915,8 +916,18 @@ g::PlaneMemoCounters memory_trajectories(int listed) {
                     const bool want = t % 3 != 0;
                     const g::PatchTest need = [want](const g::PolyhedronContact&) { return want; };
                     const g::PolyhedronContact full = g::polyhedron_contact(p.a, p.b, need);
+                    // With `scramble`, each memory query after a query of the pair the other way
+                    // round, which leaves the search's scratch (per thread) holding the other
+                    // body's planes: the memory turns only the planes it reads, and must not read
+                    // stale ones.
+                    if (scramble) {
+                        static_cast<void>(g::polyhedron_contact(p.b, p.a, need));
+                    }
                     expect_same_answer(g::polyhedron_contact(p.a, p.b, need, memo), full);
                     // Without the points and the patch polygon: the rest the same bits.
+                    if (scramble) {
+                        static_cast<void>(g::polyhedron_contact(p.b, p.a, need));
+                    }
                     g::PolyhedronContact point =
                         g::polyhedron_contact_point(p.a, p.b, need, &memo_point);
                     EXPECT_TRUE(point.points.empty() && point.patch.empty());
@@ -940,8 +951,14 @@ g::PlaneMemoCounters memory_trajectories(int listed) {
 }
 
 TEST(PolyhedronContact, MemoryChangesNoBit) {
-    const g::PlaneMemoCounters n = memory_trajectories(g::PlaneMemo::kTopFaces);
+    const g::PlaneMemoCounters n = memory_trajectories(g::PlaneMemo::kTopFaces, true);
     EXPECT_GT(n.answered, 10000 / 2); // the memory's route is exercised, not only the fallback
+    // Whether the memory answers or hands over to the full search (its certificates of overlap
+    // read B's planes too) does not depend on what the scratch held before either.
+    const g::PlaneMemoCounters fresh = memory_trajectories(g::PlaneMemo::kTopFaces, false);
+    EXPECT_EQ(n.tried, fresh.tried);
+    EXPECT_EQ(n.answered, fresh.answered);
+    EXPECT_EQ(n.refills, fresh.refills);
 }
 
 TEST(PolyhedronContact, MemoryWithAShortListChangesNoBit) {
@@ -949,7 +966,7 @@ TEST(PolyhedronContact, MemoryWithAShortListChangesNoBit) {
     // only when their bound reaches the answer; with the default list the plane is almost always
     // a listed face (the faces' separations move by at most the drift since the refill). With one
     // face listed the faces beyond decide often, and the answers stay the full search's.
-    const g::PlaneMemoCounters n = memory_trajectories(1);
+    const g::PlaneMemoCounters n = memory_trajectories(1, true);
     EXPECT_GT(n.answered, 10000 / 2);
     EXPECT_GT(n.unlisted, 100);
 }
