@@ -83,6 +83,16 @@ void rank_faces(const double* stored, std::size_t nf, std::array<int, PlaneMemo:
                        : -std::numeric_limits<double>::infinity();
 }
 
+/// Separation (m) along the face plane (n, o) of one body: the smallest n . v - o over the
+/// vertices v of the other (PlaneDistances::separation's expression, no table kept).
+double plane_separation(const Vec3& n, double o, const std::vector<Vec3>& v) {
+    double s = std::numeric_limits<double>::infinity();
+    for (const Vec3& x : v) {
+        s = std::min(s, n.dot(x) - o);
+    }
+    return s;
+}
+
 /// One face stage of the memory's search: the separations (m) of the faces of one body that can
 /// be the largest, as face_separations gives them, into `met` as (face, separation) in the order
 /// evaluated. The faces go in the memory's order (top, then the rest by index when rest's bound
@@ -334,21 +344,24 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
     double top = best;
     // Faces of A: evaluated unless their bound (stored value, drift, round-off of the stored
     // value, and the tie margin) lies below the running lower bound of the answer.
-    PlaneDistances tb(fa.face_normals, fa.face_offsets, r.vb, r.dist_b);
+    // (The separations by the full search's expression, without its table of distances: the
+    // memory's route reads none of it.)
     memo_faces(
         memo.top_a, memo.rest_a, memo.values.data(), nfa, drift_b, tol, floor,
-        [&tb](std::size_t k) { return tb.separation(k); }, met);
+        [&](std::size_t k) {
+            return plane_separation(fa.face_normals[k], fa.face_offsets[k], r.vb);
+        },
+        met);
     take_faces(met, 0, top, face, second);
     if (!(top < -tol)) {
         return false;
     }
     // Faces of B: only the planes evaluated are turned into A's frame (make_relative sized them).
-    PlaneDistances ta(r.nb, r.ob, fa.vertices, r.dist_a);
     memo_faces(
         memo.top_b, memo.rest_b, memo.values.data() + nfa, nfb, drift_a, tol, std::max(floor, top),
         [&](std::size_t k) {
             need_face(fb, r, k);
-            return ta.separation(k);
+            return plane_separation(r.nb[k], r.ob[k], fa.vertices);
         },
         met);
     take_faces(met, static_cast<int>(nfa), top, face, second);
