@@ -1,7 +1,8 @@
 // A polyhedron pair's memory of its last common-plane search between steps (geometry::PlaneMemo,
 // polyhedron_contact.hpp; docs/architecture.md, "Memory of a polyhedron pair's common plane"):
-// the refill after a full search and the search from the memory's bounds. The stages it runs are
-// the full search's own (polyhedron_search.hpp), so its answers are the full search's, bit for bit.
+// the refill after a full search and the search from the memory's bounds. Its stages evaluate the
+// candidates by the full search's own expressions (polyhedron_search.hpp), so its answers are the
+// full search's, bit for bit.
 
 #include "geometry/polyhedron_search.hpp"
 
@@ -184,9 +185,9 @@ bool memo_inside(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
     return true;
 }
 
-/// Does an edge cross the other body (the full search's second certificate)? The edge that did
-/// at the last query first, then the kept ones in r (A's, then B's); the one found is kept in
-/// memo.cross (A's edge e as e, B's as the count of A's edges + e).
+/// Does an edge cross the other body (the full search's second certificate)? B's edges first
+/// (the one that did at the last query, then the kept ones in r), then A's likewise; the one found
+/// is kept in memo.cross (A's edge e as e, B's as the count of A's edges + e).
 bool memo_crossing(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Relative& r,
                    PlaneMemo& memo) {
     // B's edges are tested against A's own planes, A's against all of B's planes turned into A's
