@@ -4,7 +4,8 @@
 // sphere-sphere overlap for comparison; mesh-wall queries of a sphere and a cube; a polyhedron
 // against a superquadric by libccd's EPA alone and with the normal's refinement
 // (depth_refinement.hpp, as the contact of such a pair runs it); two cubes whose box axes are
-// not their body frame's (`cube_turned_plane`, beside `cube_plane`). Run:
+// not their body frame's (`cube_turned_plane`, beside `cube_plane`); the closed form of two cubes
+// alone, eight pairs at a time in vector lanes (`run_box_lanes`). Run:
 // build/bench/kiln_bench_polyhedra
 
 #include "geometry/convex_contact.hpp"
@@ -102,6 +103,42 @@ void run(benchmark::State& state, const std::string& name, Method m) {
     }
     state.counters["edges"] = static_cast<double>(s.edges.size());
     state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()));
+}
+
+/// The closed form of two boxes alone (no posing, depth or patch) at the relative poses of the
+/// cube poses above: one pair at a time as polyhedron_contact runs it (detail::box_plane,
+/// `lanes` false), or eight pairs at a time in vector lanes (detail::box_planes, the same bits),
+/// the filling of the lanes included. Per pair (items).
+void run_box_lanes(benchmark::State& state, const std::string& name, bool lanes) {
+    const g::PolyhedronFeatures& s = shape(name);
+    const std::vector<Pair> pairs = poses(s);
+    std::vector<kiln::Mat3> rot;
+    std::vector<Vec3> shift;
+    for (const Pair& p : pairs) {
+        rot.push_back((p.a.q.conjugate() * p.b.q).toRotationMatrix());
+        shift.push_back(p.a.q.conjugate() * (p.b.x - p.a.x));
+    }
+    constexpr std::size_t w = g::detail::BoxLanes::kWidth;
+    g::detail::BoxLanes box_lanes;
+    std::vector<g::detail::BoxPlane> out(w);
+    std::size_t i = 0;
+    for (auto _ : state) {
+        if (lanes) {
+            for (std::size_t q = 0; q < w; ++q) {
+                const std::size_t k = (i + q) % pairs.size();
+                g::detail::box_lane(box_lanes, q, s, s, rot[k], shift[k]);
+            }
+            g::detail::box_planes(box_lanes, w, out.data());
+        } else {
+            for (std::size_t q = 0; q < w; ++q) {
+                const std::size_t k = (i + q) % pairs.size();
+                out[q] = g::detail::box_plane(s, s, rot[k], shift[k]);
+            }
+        }
+        benchmark::DoNotOptimize(out.data());
+        i += w;
+    }
+    state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * w));
 }
 
 /// Sphere-sphere overlap, normal and contact point (the spherical narrow phase), for comparison.
@@ -237,6 +274,8 @@ BENCHMARK_CAPTURE(run, cube_plane, std::string("cube"), Method::kPlane);
 BENCHMARK_CAPTURE(run, cube_plane_patch, std::string("cube"), Method::kPlanePatch);
 BENCHMARK_CAPTURE(run, cube_plane_general, std::string("cube"), Method::kPlaneGeneral);
 BENCHMARK_CAPTURE(run, cube_turned_plane, std::string("cube_turned"), Method::kPlane);
+BENCHMARK_CAPTURE(run_box_lanes, cube_closed_form, std::string("cube"), false);
+BENCHMARK_CAPTURE(run_box_lanes, cube_closed_form_lanes, std::string("cube"), true);
 BENCHMARK_CAPTURE(run, cube_epa, std::string("cube"), Method::kEpa);
 BENCHMARK_CAPTURE(run, cube_mpr, std::string("cube"), Method::kMpr);
 BENCHMARK_CAPTURE(run, plate_plane, std::string("plate_10x9x2"), Method::kPlane);

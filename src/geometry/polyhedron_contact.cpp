@@ -850,112 +850,6 @@ bool full_search(const PosedPolyhedron& a, const PosedPolyhedron& b, detail::Fac
     return true;
 }
 
-/// The common plane of two boxes (fa.box and fb.box set; after make_relative): best (the largest
-/// separation, m), best_m (A's frame, from B to A), c.feature and c.iterations, as the full
-/// search sets them. The candidates of the separating-axis test for boxes (Gottschalk, Lin and
-/// Manocha 1996, SIGGRAPH, "OBBTree", Sec. 4): the three face normals of each box and the nine
-/// cross products of their edge directions, each direction n rated by the support functions,
-/// separation = |n . t| - h_A(n) - h_B(n) (t B's centre relative to A's; a box's support
-/// function is even). Why it is the full search's answer: the faces of the Minkowski difference
-/// have normals among these directions, and along any direction the overlap of two overlapping
-/// bodies is at least the penetration depth, so the largest separation over a set of directions
-/// holding every face normal is the largest over the faces (the full search's value, to
-/// round-off). Apart, the largest is positive (a separating axis), as the full search's first
-/// separating plane is. Everything in A's box frame: C = A's axes^T B's axes, t likewise, so each
-/// support is a sum of three products; the cross products' components are entries of C, and the
-/// separation along one is divided by its length only at the end, so it keeps full relative
-/// precision for nearly parallel edges. Exactly parallel edges (length <= 1e-12) give no
-/// direction: their planes are face planes.
-void box_plane(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const Relative& r,
-               double& best, Vec3& best_m, PolyhedronContact& c) {
-    const PolyhedronFeatures::Box& ba = *fa.box;
-    const PolyhedronFeatures::Box& bb = *fb.box;
-    // B's axes in A's box frame, B's centre there (m): for two boxes along their bodies' axes
-    // the relative pose as it is.
-    const bool turned = !ba.aligned || !bb.aligned;
-    const Mat3 cm = turned ? Mat3(ba.axes.transpose() * (r.rot * bb.axes)) : r.rot;
-    const Vec3 t = turned ? Vec3(ba.axes.transpose() * r.shift) : r.shift;
-    const Mat3 ac = cm.cwiseAbs();
-    const Vec3& ha = ba.half;
-    const Vec3& hb = bb.half;
-    int win = -1; // 0-2: face of A, 3-5: face of B, 6 + 3 i + j: edge i of A with edge j of B
-    double top = -std::numeric_limits<double>::infinity();
-    for (int i = 0; i < 3; ++i) {
-        const double sep = std::abs(t[i]) - ha[i] - ac.row(i).dot(hb);
-        if (sep > top) {
-            top = sep;
-            win = i;
-        }
-    }
-    const Vec3 tc = cm.transpose() * t; // t along B's axes
-    for (int j = 0; j < 3; ++j) {
-        const double sep = std::abs(tc[j]) - hb[j] - ac.col(j).dot(ha);
-        if (sep > top) {
-            top = sep;
-            win = 3 + j;
-        }
-    }
-    // Edge i of A with edge j of B: n = e_i x C_j has components 0 (i), -C(i2, j) (i1) and
-    // C(i1, j) (i2), length len. Compared as numerators against top * len (len > 0), the one
-    // division is the winner's.
-    int wi = 0;
-    int wj = 0;
-    double w_len = 1.0;
-    int count = 6;
-    for (int i = 0; i < 3; ++i) {
-        const int i1 = i == 2 ? 0 : i + 1;
-        const int i2 = i == 0 ? 2 : i - 1;
-        for (int j = 0; j < 3; ++j) {
-            const int j1 = j == 2 ? 0 : j + 1;
-            const int j2 = j == 0 ? 2 : j - 1;
-            const double n1 = -cm(i2, j);
-            const double n2 = cm(i1, j);
-            const double len = std::sqrt(n1 * n1 + n2 * n2);
-            if (len <= 1e-12) {
-                continue;
-            }
-            ++count;
-            // B's support along n from n . C_l (l = j gives 0: a triple product with C_j twice).
-            const double c1 = n1 * cm(i1, j1) + n2 * cm(i2, j1);
-            const double c2 = n1 * cm(i1, j2) + n2 * cm(i2, j2);
-            const double num = std::abs(n1 * t[i1] + n2 * t[i2]) - ha[i1] * std::abs(n1) -
-                               ha[i2] * std::abs(n2) - hb[j1] * std::abs(c1) -
-                               hb[j2] * std::abs(c2);
-            if (num > top * len) {
-                top = num / len;
-                win = 6 + 3 * i + j;
-                wi = i;
-                wj = j;
-                w_len = len;
-            }
-        }
-    }
-    c.iterations += count;
-    best = top;
-    if (win < 3) {
-        const auto i = static_cast<std::size_t>(win);
-        const auto k = static_cast<std::size_t>(t[win] < 0.0 ? ba.minus[i] : ba.plus[i]);
-        best_m = -fa.face_normals[k];
-        c.feature = CommonPlaneFeature::kFaceOfA;
-    } else if (win < 6) {
-        // B's face towards A: its normal points against t.
-        const auto j = static_cast<std::size_t>(win - 3);
-        const auto k = static_cast<std::size_t>(tc[win - 3] > 0.0 ? bb.minus[j] : bb.plus[j]);
-        best_m = r.rot * fb.face_normals[k];
-        c.feature = CommonPlaneFeature::kFaceOfB;
-    } else {
-        // From B to A: against t.
-        const int i1 = wi == 2 ? 0 : wi + 1;
-        const int i2 = wi == 0 ? 2 : wi - 1;
-        Vec3 n = Vec3::Zero();
-        n[i1] = -cm(i2, wj);
-        n[i2] = cm(i1, wj);
-        const Vec3 m = ba.axes * (n / w_len);
-        best_m = t.dot(n) > 0.0 ? Vec3(-m) : m;
-        c.feature = CommonPlaneFeature::kEdgeEdge;
-    }
-}
-
 /// The fast common plane; the patch as `with_patch` says, or (with `need_patch`) as it decides.
 /// `scan`: which face stages (see detail::FaceScan).
 /// `point_only`: points and patch polygon left empty (see patch_in_a).
@@ -985,8 +879,12 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
     double best = -std::numeric_limits<double>::infinity();
     Vec3 best_m = Vec3::UnitX();
     if (scan == detail::FaceScan::automatic && fa.box && fb.box) {
-        // Two boxes: the closed form, and no memory (the closed form costs less than one).
-        box_plane(fa, fb, r, best, best_m, c);
+        // Two boxes: the closed form (box_plane.cpp), and no memory (it costs less than one).
+        const detail::BoxPlane bp = detail::box_plane(fa, fb, r.rot, r.shift);
+        best = bp.best;
+        best_m = bp.normal;
+        c.feature = bp.feature;
+        c.iterations += bp.candidates;
     } else {
         // A resting pair's memory first (same answer); the full search when it cannot tell.
         const bool from_memo = memo != nullptr && memo_search(fa, fb, r, *memo, best, best_m, c);

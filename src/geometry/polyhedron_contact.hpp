@@ -52,7 +52,7 @@ struct PolyhedronFeatures {
     double r_equiv = 0.0;
 
     /// A rectangular box (cuboid) centred on the body origin, given by its faces: two boxes meet
-    /// in the closed form of the separating-axis test (polyhedron_contact.cpp, box_plane) instead
+    /// in the closed form of the separating-axis test (box_plane.cpp, detail::box_plane) instead
     /// of the general search and its memory.
     struct Box {
         Mat3 axes; ///< columns: unit normals of three faces, one per pair (body frame)
@@ -154,6 +154,38 @@ enum class FaceScan {
 /// most PlaneMemo::kTopFaces (the default): tests shorten the list so that the faces beyond it
 /// decide often. The answers are the same bits for any length.
 int& memo_listed_faces();
+
+/// The closed-form common plane of two boxes (PolyhedronFeatures::box) at one relative pose: the
+/// largest separation (m, < 0: overlap), the normal from B to A (A's body frame), the plane's
+/// feature and the number of candidate planes (box_plane.cpp).
+struct BoxPlane {
+    double best = 0.0;
+    Vec3 normal = Vec3::UnitX();
+    CommonPlaneFeature feature = CommonPlaneFeature::kNone;
+    int candidates = 0;
+};
+/// One pair, as polyhedron_contact runs it (rot: B body -> A body, shift: B's centre in A's
+/// frame, m; both bodies boxes).
+[[nodiscard]] BoxPlane box_plane(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb,
+                                 const Mat3& rot, const Vec3& shift);
+/// Pairs of boxes in lanes: the inputs of the closed form per lane in structure-of-arrays form,
+/// evaluated lane-parallel without branches (the winner chosen by box_plane's comparisons, in its
+/// order), then each lane finished by box_plane's own code: box_plane's answer, bit for bit.
+struct BoxLanes {
+    static constexpr std::size_t kWidth = 8;
+    const PolyhedronFeatures* fa[kWidth] = {};
+    const PolyhedronFeatures* fb[kWidth] = {};
+    const Mat3* rot[kWidth] = {};     ///< B body -> A body (the caller's storage)
+    alignas(64) double c[9][kWidth];  ///< B's box axes in A's box frame, entry (i, j) at 3 i + j
+    alignas(64) double t[3][kWidth];  ///< B's centre in A's box frame (m)
+    alignas(64) double ha[3][kWidth]; ///< A's half extents (m)
+    alignas(64) double hb[3][kWidth]; ///< B's half extents (m)
+};
+/// Fills lane q of `lanes` for the pair (fa, fb) at the relative pose (rot, shift); both boxes.
+void box_lane(BoxLanes& lanes, std::size_t q, const PolyhedronFeatures& fa,
+              const PolyhedronFeatures& fb, const Mat3& rot, const Vec3& shift);
+/// The first n lanes' common planes into out[0..n).
+void box_planes(const BoxLanes& lanes, std::size_t n, BoxPlane* out);
 } // namespace detail
 
 /// Memory of one pair's common plane between steps (temporal coherence of a resting contact).

@@ -1,0 +1,287 @@
+// The common plane of two boxes in closed form (geometry::detail::box_plane, one pair, as
+// polyhedron_contact runs it) and the same for several pairs at once in vector lanes
+// (detail::box_planes; the first piece of the resting pairs' narrow phase across pairs,
+// docs/performance.md "Session 18" and "Session 28").
+//
+// The candidates of the separating-axis test for boxes (Gottschalk, Lin and Manocha 1996,
+// SIGGRAPH, "OBBTree", Sec. 4): the three face normals of each box and the nine cross products of
+// their edge directions, each direction n rated by the support functions, separation =
+// |n . t| - h_A(n) - h_B(n) (t B's centre relative to A's; a box's support function is even).
+// Why it is the general search's answer: the faces of the Minkowski difference have normals among
+// these directions, and along any direction the overlap of two overlapping bodies is at least the
+// penetration depth, so the largest separation over a set of directions holding every face normal
+// is the largest over the faces (the general search's value, to round-off). Apart, the largest is
+// positive (a separating axis), as the general search's first separating plane is. Everything in
+// A's box frame: C = A's axes^T B's axes, t likewise, so each support is a sum of three products;
+// the cross products' components are entries of C, and the separation along one is divided by
+// its length only at the end, so it keeps full relative precision for nearly parallel edges.
+// Exactly parallel edges (length <= 1e-12) give no direction: their planes are face planes.
+//
+// Both forms write every product that meets a sum as an explicit fused multiply-add (std::fma),
+// in the same order, and leave the compiler no product to fuse on its own: so the lanes give the
+// one-pair form's answer bit for bit however GCC inlines or vectorises either
+// (tests/geometry/test_box_lanes.cpp). The winner's normal is built by one function for both.
+
+#include "geometry/polyhedron_contact.hpp"
+
+#include <cmath>
+#include <cstddef>
+#include <limits>
+
+namespace kiln::geometry::detail {
+
+namespace {
+
+/// B's axes (cm) and centre (t) in A's box frame, from the relative pose (rot: B body -> A body,
+/// shift: B's centre in A's frame): for two boxes along their bodies' axes the pose as it is.
+[[gnu::noinline]] void box_frame(const PolyhedronFeatures::Box& ba,
+                                 const PolyhedronFeatures::Box& bb, const Mat3& rot,
+                                 const Vec3& shift, Mat3& cm, Vec3& t) {
+    const bool turned = !ba.aligned || !bb.aligned;
+    cm = turned ? Mat3(ba.axes.transpose() * (rot * bb.axes)) : rot;
+    t = turned ? Vec3(ba.axes.transpose() * shift) : shift;
+}
+
+/// a0 b0 + a1 b1 + a2 b2, fused in that order.
+inline double dot3(double a0, double a1, double a2, double b0, double b1, double b2) {
+    return std::fma(a2, b2, std::fma(a1, b1, a0 * b0));
+}
+
+/// Separation along face i of A (faces of B: the same with the roles swapped): |t_i| - ha_i -
+/// |C_i0| hb_0 - |C_i1| hb_1 - |C_i2| hb_2 (the support of B along the axis).
+inline double face_separation(double ti, double hi, double ac0, double ac1, double ac2, double h0,
+                              double h1, double h2) {
+    return std::abs(ti) - hi - dot3(ac0, ac1, ac2, h0, h1, h2);
+}
+
+/// Edge i of A with edge j of B: n = e_i x C_j has components n1 = -C(i2, j) (i1) and
+/// n2 = C(i1, j) (i2), and 0 along i. Its numerator |n . t| - h_A(n) - h_B(n) (B's support along n
+/// from n . C_l; l = j gives 0, a triple product with C_j twice) and its length.
+inline void edge_candidate(double n1, double n2, double t1, double t2, double ha1, double ha2,
+                           double c1j1, double c2j1, double c1j2, double c2j2, double hb1,
+                           double hb2, double& num, double& len) {
+    len = std::sqrt(std::fma(n1, n1, n2 * n2));
+    const double c1 = std::fma(n1, c1j1, n2 * c2j1);
+    const double c2 = std::fma(n1, c1j2, n2 * c2j2);
+    num = std::fma(
+        -hb2, std::abs(c2),
+        std::fma(-hb1, std::abs(c1),
+                 std::fma(-ha2, std::abs(n2),
+                          std::fma(-ha1, std::abs(n1), std::abs(std::fma(n1, t1, n2 * t2))))));
+}
+
+constexpr int next(int i) {
+    return i == 2 ? 0 : i + 1;
+}
+constexpr int prev(int i) {
+    return i == 0 ? 2 : i - 1;
+}
+
+/// The answer from the winning candidate `win` (0-2: face i of A, 3-5: face j of B, 6 + 3 i + j:
+/// edge i of A with edge j of B, of length w_len): the normal from B to A in A's body frame and
+/// the feature. cm, t, tc: B's axes, B's centre and tc = cm^T t in A's box frame.
+[[gnu::noinline]] void box_plane_end(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb,
+                                     const Mat3& rot, const Mat3& cm, const Vec3& t, const Vec3& tc,
+                                     int win, double w_len, BoxPlane& out) {
+    const PolyhedronFeatures::Box& ba = *fa.box;
+    const PolyhedronFeatures::Box& bb = *fb.box;
+    if (win < 3) {
+        const auto i = static_cast<std::size_t>(win);
+        const auto k = static_cast<std::size_t>(t[win] < 0.0 ? ba.minus[i] : ba.plus[i]);
+        out.normal = -fa.face_normals[k];
+        out.feature = CommonPlaneFeature::kFaceOfA;
+    } else if (win < 6) {
+        // B's face towards A: its normal points against t.
+        const auto j = static_cast<std::size_t>(win - 3);
+        const auto k = static_cast<std::size_t>(tc[win - 3] > 0.0 ? bb.minus[j] : bb.plus[j]);
+        out.normal = rot * fb.face_normals[k];
+        out.feature = CommonPlaneFeature::kFaceOfB;
+    } else {
+        // From B to A: against t.
+        const int wi = (win - 6) / 3;
+        const int wj = (win - 6) % 3;
+        Vec3 n = Vec3::Zero();
+        n[next(wi)] = -cm(prev(wi), wj);
+        n[prev(wi)] = cm(next(wi), wj);
+        const Vec3 m = ba.axes * (n / w_len);
+        out.normal = t.dot(n) > 0.0 ? Vec3(-m) : m;
+        out.feature = CommonPlaneFeature::kEdgeEdge;
+    }
+}
+
+} // namespace
+
+BoxPlane box_plane(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, const Mat3& rot,
+                   const Vec3& shift) {
+    const PolyhedronFeatures::Box& ba = *fa.box;
+    const PolyhedronFeatures::Box& bb = *fb.box;
+    Mat3 cm;
+    Vec3 t;
+    box_frame(ba, bb, rot, shift, cm, t);
+    const Mat3 ac = cm.cwiseAbs();
+    const Vec3& ha = ba.half;
+    const Vec3& hb = bb.half;
+    int win = -1;
+    double top = -std::numeric_limits<double>::infinity();
+    for (int i = 0; i < 3; ++i) {
+        const double sep =
+            face_separation(t[i], ha[i], ac(i, 0), ac(i, 1), ac(i, 2), hb[0], hb[1], hb[2]);
+        if (sep > top) {
+            top = sep;
+            win = i;
+        }
+    }
+    Vec3 tc;
+    for (int j = 0; j < 3; ++j) {
+        tc[j] = dot3(cm(0, j), cm(1, j), cm(2, j), t[0], t[1], t[2]); // t along B's axes
+        const double sep =
+            face_separation(tc[j], hb[j], ac(0, j), ac(1, j), ac(2, j), ha[0], ha[1], ha[2]);
+        if (sep > top) {
+            top = sep;
+            win = 3 + j;
+        }
+    }
+    // Compared as numerators against top * len (len > 0), the one division is the winner's.
+    double w_len = 1.0;
+    int count = 6;
+    for (int i = 0; i < 3; ++i) {
+        const int i1 = next(i);
+        const int i2 = prev(i);
+        for (int j = 0; j < 3; ++j) {
+            const int j1 = next(j);
+            const int j2 = prev(j);
+            double num;
+            double len;
+            edge_candidate(-cm(i2, j), cm(i1, j), t[i1], t[i2], ha[i1], ha[i2], cm(i1, j1),
+                           cm(i2, j1), cm(i1, j2), cm(i2, j2), hb[j1], hb[j2], num, len);
+            if (len <= 1e-12) {
+                continue;
+            }
+            ++count;
+            if (num > top * len) {
+                top = num / len;
+                win = 6 + 3 * i + j;
+                w_len = len;
+            }
+        }
+    }
+    BoxPlane out;
+    out.best = top;
+    out.candidates = count;
+    box_plane_end(fa, fb, rot, cm, t, tc, win, w_len, out);
+    return out;
+}
+
+void box_lane(BoxLanes& lanes, std::size_t q, const PolyhedronFeatures& fa,
+              const PolyhedronFeatures& fb, const Mat3& rot, const Vec3& shift) {
+    Mat3 cm;
+    Vec3 t;
+    box_frame(*fa.box, *fb.box, rot, shift, cm, t);
+    lanes.fa[q] = &fa;
+    lanes.fb[q] = &fb;
+    lanes.rot[q] = &rot;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            lanes.c[3 * i + j][q] = cm(i, j);
+        }
+        lanes.t[i][q] = t[i];
+        lanes.ha[i][q] = fa.box->half[i];
+        lanes.hb[i][q] = fb.box->half[i];
+    }
+}
+
+void box_planes(const BoxLanes& lanes, std::size_t n, BoxPlane* out) {
+    constexpr std::size_t w = BoxLanes::kWidth;
+    alignas(64) double top[w];
+    alignas(64) double w_len[w];
+    alignas(64) double tc[3][w];
+    alignas(64) int win[w];
+    alignas(64) int count[w];
+    const auto& c = lanes.c;
+    const auto& t = lanes.t;
+    const auto& ha = lanes.ha;
+    const auto& hb = lanes.hb;
+    // The one-pair form's candidates and comparisons in its order, candidate by candidate across
+    // the lanes; a candidate replaces a lane's running best where the one-pair form's test holds
+    // (no branch). Lanes past n hold whatever their inputs are; their results are not read.
+#pragma omp simd
+    for (std::size_t q = 0; q < w; ++q) {
+        top[q] = -std::numeric_limits<double>::infinity();
+        win[q] = -1;
+        w_len[q] = 1.0;
+        count[q] = 6;
+    }
+    for (int i = 0; i < 3; ++i) {
+#pragma omp simd
+        for (std::size_t q = 0; q < w; ++q) {
+            const double sep =
+                face_separation(t[i][q], ha[i][q], std::abs(c[3 * i][q]), std::abs(c[3 * i + 1][q]),
+                                std::abs(c[3 * i + 2][q]), hb[0][q], hb[1][q], hb[2][q]);
+            const bool g = sep > top[q];
+            top[q] = g ? sep : top[q];
+            win[q] = g ? i : win[q];
+        }
+    }
+    for (int j = 0; j < 3; ++j) {
+#pragma omp simd
+        for (std::size_t q = 0; q < w; ++q) {
+            tc[j][q] = dot3(c[j][q], c[3 + j][q], c[6 + j][q], t[0][q], t[1][q], t[2][q]);
+            const double sep =
+                face_separation(tc[j][q], hb[j][q], std::abs(c[j][q]), std::abs(c[3 + j][q]),
+                                std::abs(c[6 + j][q]), ha[0][q], ha[1][q], ha[2][q]);
+            const bool g = sep > top[q];
+            top[q] = g ? sep : top[q];
+            win[q] = g ? 3 + j : win[q];
+        }
+    }
+    for (int i = 0; i < 3; ++i) {
+        const int i1 = next(i);
+        const int i2 = prev(i);
+        for (int j = 0; j < 3; ++j) {
+            const int j1 = next(j);
+            const int j2 = prev(j);
+            const int id = 6 + 3 * i + j;
+            // The division only where a lane's candidate wins (rare in a resting pile, where
+            // face planes win): first the tests, then the quotients if any lane needs one.
+            alignas(64) double num[w];
+            alignas(64) double len[w];
+            alignas(64) int g[w];
+            int wins = 0;
+#pragma omp simd reduction(+ : wins)
+            for (std::size_t q = 0; q < w; ++q) {
+                edge_candidate(-c[3 * i2 + j][q], c[3 * i1 + j][q], t[i1][q], t[i2][q], ha[i1][q],
+                               ha[i2][q], c[3 * i1 + j1][q], c[3 * i2 + j1][q], c[3 * i1 + j2][q],
+                               c[3 * i2 + j2][q], hb[j1][q], hb[j2][q], num[q], len[q]);
+                const bool valid = !(len[q] <= 1e-12);
+                count[q] += valid ? 1 : 0;
+                g[q] = valid && num[q] > top[q] * len[q] ? 1 : 0;
+                wins += g[q];
+            }
+            if (wins == 0) {
+                continue;
+            }
+#pragma omp simd
+            for (std::size_t q = 0; q < w; ++q) {
+                top[q] = g[q] != 0 ? num[q] / len[q] : top[q];
+                win[q] = g[q] != 0 ? id : win[q];
+                w_len[q] = g[q] != 0 ? len[q] : w_len[q];
+            }
+        }
+    }
+    for (std::size_t q = 0; q < n; ++q) {
+        Mat3 cm;
+        for (int i = 0; i < 3; ++i) {
+            for (int j = 0; j < 3; ++j) {
+                cm(i, j) = c[3 * i + j][q];
+            }
+        }
+        BoxPlane& o = out[q];
+        o.best = top[q];
+        o.candidates = count[q];
+        box_plane_end(*lanes.fa[q], *lanes.fb[q], *lanes.rot[q], cm,
+                      Vec3(t[0][q], t[1][q], t[2][q]), Vec3(tc[0][q], tc[1][q], tc[2][q]), win[q],
+                      w_len[q], o);
+    }
+}
+
+} // namespace kiln::geometry::detail
