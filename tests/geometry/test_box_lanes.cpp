@@ -1,8 +1,9 @@
 // Two boxes' closed-form common plane in vector lanes (geometry::detail::box_planes,
-// src/geometry/box_plane.cpp) against the one-pair closed form that polyhedron_contact runs: the
-// same separation, normal, feature and candidate count, bit for bit, lane by lane, for pairs of the
-// shipped boxes (and a box whose axes are not its body frame's) in random, near, stacked and
-// edge-on-edge poses, with the lanes mixing shapes and poses.
+// src/geometry/box_plane.cpp) against the one-pair closed form (detail::box_plane), and that
+// against polyhedron_contact, which runs it: the lanes give the same separation, normal, feature
+// and candidate count, bit for bit, lane by lane, for pairs of the shipped boxes (and a box whose
+// axes are not its body frame's) in random, near, stacked and edge-on-edge poses, with the lanes
+// mixing shapes and poses.
 
 #include "geometry/polyhedron.hpp"
 #include "geometry/polyhedron_contact.hpp"
@@ -138,6 +139,7 @@ TEST(BoxLanes, EveryLaneIsTheScalarClosedForm) {
     constexpr std::size_t w = g::detail::BoxLanes::kWidth;
     g::detail::BoxLanes lanes;
     std::vector<Mat3> rot(w);
+    std::vector<g::detail::BoxPlane> one(w);
     std::vector<g::detail::BoxPlane> out(w);
     int features[4] = {};
     int touching = 0;
@@ -146,10 +148,11 @@ TEST(BoxLanes, EveryLaneIsTheScalarClosedForm) {
         const std::size_t n = std::min(w, cases.size() - k0);
         for (std::size_t q = 0; q < n; ++q) {
             const Case& c = cases[k0 + q];
-            // The relative pose as polyhedron_contact computes it.
+            // The relative pose as polyhedron_contact computes it (the same function).
             g::search::Relative r;
             g::search::make_relative(c.a, c.b, r);
             rot[q] = r.rot;
+            one[q] = g::detail::box_plane(*c.a.shape, *c.b.shape, rot[q], r.shift);
             g::detail::box_lane(lanes, q, *c.a.shape, *c.b.shape, rot[q], r.shift);
         }
         g::detail::box_planes(lanes, n, out.data());
@@ -157,14 +160,20 @@ TEST(BoxLanes, EveryLaneIsTheScalarClosedForm) {
             const Case& c = cases[k0 + q];
             const g::detail::BoxPlane& o = out[q];
             SCOPED_TRACE("case " + std::to_string(k0 + q));
-            ASSERT_EQ(o.feature, c.scalar.feature);
-            // depth = -best, bit for bit; the normal as polyhedron_contact turns it to the world.
-            ASSERT_EQ(-o.best, c.scalar.depth);
-            ASSERT_EQ(o.candidates, c.scalar.iterations);
-            const Vec3 normal = c.a.q * o.normal;
-            ASSERT_EQ(normal.x(), c.scalar.normal.x());
-            ASSERT_EQ(normal.y(), c.scalar.normal.y());
-            ASSERT_EQ(normal.z(), c.scalar.normal.z());
+            // The one-pair form is polyhedron_contact's plane: its depth is -best (a negation),
+            // its world normal A's turn of the normal (here turned in another file, which GCC
+            // may fuse otherwise: to round-off).
+            ASSERT_EQ(one[q].feature, c.scalar.feature);
+            ASSERT_EQ(-one[q].best, c.scalar.depth);
+            ASSERT_EQ(one[q].candidates, c.scalar.iterations);
+            ASSERT_LE((c.a.q * one[q].normal - c.scalar.normal).norm(), 1e-15);
+            // The lanes are the one-pair form, bit for bit (A's frame).
+            ASSERT_EQ(o.feature, one[q].feature);
+            ASSERT_EQ(o.best, one[q].best);
+            ASSERT_EQ(o.candidates, one[q].candidates);
+            ASSERT_EQ(o.normal.x(), one[q].normal.x());
+            ASSERT_EQ(o.normal.y(), one[q].normal.y());
+            ASSERT_EQ(o.normal.z(), one[q].normal.z());
             ++features[static_cast<int>(o.feature)];
             touching += c.scalar.touching ? 1 : 0;
             ++checked;
