@@ -5,13 +5,16 @@
 // against a superquadric by libccd's EPA alone and with the normal's refinement
 // (depth_refinement.hpp, as the contact of such a pair runs it); two cubes whose box axes are
 // not their body frame's (`cube_turned_plane`, beside `cube_plane`); the closed form of two cubes
-// alone, eight pairs at a time in vector lanes (`run_box_lanes`). Run:
+// alone, one pair or eight at a time in vector lanes (`run_box_lanes`); from two cubes' poses to
+// their plane, as the run does it and in lanes (`run_box_route`, an estimate for a batched route).
+// Run:
 // build/bench/kiln_bench_polyhedra
 
 #include "geometry/convex_contact.hpp"
 #include "geometry/depth_refinement.hpp"
 #include "geometry/mesh_wall.hpp"
 #include "geometry/polyhedron_contact.hpp"
+#include "geometry/polyhedron_search.hpp"
 #include "io/shape_reader.hpp"
 
 #include <algorithm>
@@ -137,6 +140,128 @@ void run_box_lanes(benchmark::State& state, const std::string& name, bool lanes)
         }
         benchmark::DoNotOptimize(out.data());
         i += w;
+    }
+    state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * w));
+}
+
+/// What the resting box pairs' route in lanes could give (session 28's estimate; not the run's
+/// code): per pair, from the two bodies' poses (x, q; world) to the plane (separation and world
+/// normal). `lanes` false: as the run does it, B placed in A's frame (search::make_relative, B's
+/// vertices included: the depth reads them), the one-pair closed form and A's turn of the normal.
+/// `lanes` true: the relative pose for eight pairs in lanes (the quaternion product, its rotation
+/// matrix and B's centre in A's frame, by the same formulas as unit_rotation_matrix, not the same
+/// bits), the closed form in lanes, and the normal turned by A's rotation matrix, for eight pairs
+/// at a time. Per pair (items).
+void run_box_route(benchmark::State& state, bool lanes) {
+    const g::PolyhedronFeatures& s = shape("cube");
+    const std::vector<Pair> pairs = poses(s);
+    constexpr std::size_t w = g::detail::BoxLanes::kWidth;
+    const std::size_t nb = pairs.size() / w;
+    // The poses in structure-of-arrays form per block of eight (as a batched route would keep
+    // them).
+    struct Block {
+        alignas(64) double qa[4][w];
+        alignas(64) double qb[4][w];
+        alignas(64) double d[3][w];
+    };
+    std::vector<Block> blocks(nb);
+    for (std::size_t k = 0; k < nb * w; ++k) {
+        Block& b = blocks[k / w];
+        const std::size_t q = k % w;
+        const Pair& p = pairs[k];
+        for (int c = 0; c < 4; ++c) {
+            b.qa[c][q] = p.a.q.coeffs()[c];
+            b.qb[c][q] = p.b.q.coeffs()[c];
+        }
+        for (int c = 0; c < 3; ++c) {
+            b.d[c][q] = p.b.x[c] - p.a.x[c];
+        }
+    }
+    g::detail::BoxLanes box_lanes;
+    std::vector<kiln::Mat3> rot(w);
+    std::vector<g::detail::BoxPlane> out(w);
+    alignas(64) double ra[9][w];
+    alignas(64) double normal[3][w];
+    thread_local g::search::Relative r;
+    std::size_t i = 0;
+    for (auto _ : state) {
+        if (!lanes) {
+            for (std::size_t q = 0; q < w; ++q) {
+                const Pair& p = pairs[(i * w + q) % (nb * w)];
+                g::search::make_relative(p.a, p.b, r);
+                out[q] = g::detail::box_plane(s, s, r.rot, r.shift);
+                const Vec3 n = p.a.q * out[q].normal;
+                for (int c = 0; c < 3; ++c) {
+                    normal[c][q] = n[c];
+                }
+            }
+        } else {
+            const Block& b = blocks[i % nb];
+#pragma omp simd
+            for (std::size_t q = 0; q < w; ++q) {
+                // qab = conj(qa) qb (Eigen's coefficient order x, y, z, w).
+                const double ax = -b.qa[0][q];
+                const double ay = -b.qa[1][q];
+                const double az = -b.qa[2][q];
+                const double aw = b.qa[3][q];
+                const double bx = b.qb[0][q];
+                const double by = b.qb[1][q];
+                const double bz = b.qb[2][q];
+                const double bw = b.qb[3][q];
+                const double x = aw * bx + ax * bw + ay * bz - az * by;
+                const double y = aw * by - ax * bz + ay * bw + az * bx;
+                const double z = aw * bz + ax * by - ay * bx + az * bw;
+                const double qw = aw * bw - ax * bx - ay * by - az * bz;
+                double* c = &box_lanes.c[0][0];
+                c[0 * w + q] = 1 - 2 * (y * y + z * z);
+                c[1 * w + q] = 2 * (x * y - qw * z);
+                c[2 * w + q] = 2 * (x * z + qw * y);
+                c[3 * w + q] = 2 * (x * y + qw * z);
+                c[4 * w + q] = 1 - 2 * (x * x + z * z);
+                c[5 * w + q] = 2 * (y * z - qw * x);
+                c[6 * w + q] = 2 * (x * z - qw * y);
+                c[7 * w + q] = 2 * (y * z + qw * x);
+                c[8 * w + q] = 1 - 2 * (x * x + y * y);
+                // A's rotation matrix (A body -> world); B's centre in A's frame is R_A^T d.
+                const double ux = -ax;
+                const double uy = -ay;
+                const double uz = -az;
+                ra[0][q] = 1 - 2 * (uy * uy + uz * uz);
+                ra[1][q] = 2 * (ux * uy - aw * uz);
+                ra[2][q] = 2 * (ux * uz + aw * uy);
+                ra[3][q] = 2 * (ux * uy + aw * uz);
+                ra[4][q] = 1 - 2 * (ux * ux + uz * uz);
+                ra[5][q] = 2 * (uy * uz - aw * ux);
+                ra[6][q] = 2 * (ux * uz - aw * uy);
+                ra[7][q] = 2 * (uy * uz + aw * ux);
+                ra[8][q] = 1 - 2 * (ux * ux + uy * uy);
+                for (int k = 0; k < 3; ++k) {
+                    box_lanes.t[k][q] =
+                        ra[k][q] * b.d[0][q] + ra[3 + k][q] * b.d[1][q] + ra[6 + k][q] * b.d[2][q];
+                    box_lanes.ha[k][q] = s.box->half[k];
+                    box_lanes.hb[k][q] = s.box->half[k];
+                }
+            }
+            for (std::size_t q = 0; q < w; ++q) {
+                box_lanes.fa[q] = &s;
+                box_lanes.fb[q] = &s;
+                for (int k = 0; k < 9; ++k) {
+                    rot[q](k / 3, k % 3) = box_lanes.c[k][q];
+                }
+                box_lanes.rot[q] = &rot[q];
+            }
+            g::detail::box_planes(box_lanes, w, out.data());
+            for (std::size_t q = 0; q < w; ++q) {
+                for (int c = 0; c < 3; ++c) {
+                    normal[c][q] = ra[3 * c][q] * out[q].normal[0] +
+                                   ra[3 * c + 1][q] * out[q].normal[1] +
+                                   ra[3 * c + 2][q] * out[q].normal[2];
+                }
+            }
+        }
+        benchmark::DoNotOptimize(normal);
+        benchmark::DoNotOptimize(out.data());
+        ++i;
     }
     state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * w));
 }
@@ -276,6 +401,8 @@ BENCHMARK_CAPTURE(run, cube_plane_general, std::string("cube"), Method::kPlaneGe
 BENCHMARK_CAPTURE(run, cube_turned_plane, std::string("cube_turned"), Method::kPlane);
 BENCHMARK_CAPTURE(run_box_lanes, cube_closed_form, std::string("cube"), false);
 BENCHMARK_CAPTURE(run_box_lanes, cube_closed_form_lanes, std::string("cube"), true);
+BENCHMARK_CAPTURE(run_box_route, cube_pose_to_plane, false);
+BENCHMARK_CAPTURE(run_box_route, cube_pose_to_plane_lanes, true);
 BENCHMARK_CAPTURE(run, cube_epa, std::string("cube"), Method::kEpa);
 BENCHMARK_CAPTURE(run, cube_mpr, std::string("cube"), Method::kMpr);
 BENCHMARK_CAPTURE(run, plate_plane, std::string("plate_10x9x2"), Method::kPlane);
