@@ -36,6 +36,23 @@ inline double fused(double a, double b, double c) {
 #endif
 }
 
+/// Runs f, whose loops are orphaned `omp for` constructs, in a team of `threads` threads, or
+/// directly when there is one thread and no enclosing parallel region: there libgomp forms no
+/// team and the loops' implicit barriers return at once, while a team of one thread still ends
+/// each barrier with a system call waking its (absent) waiters, 4 per step of a sphere scene and
+/// 0.6 us each on a virtual machine (docs/performance.md, "Session 28"). The same iterations in
+/// the same order either way, so the same bits.
+template <class F> void in_team(int threads, F&& f) {
+#ifdef _OPENMP
+    if (threads == 1 && !omp_in_parallel()) {
+        f();
+        return;
+    }
+#endif
+#pragma omp parallel num_threads(threads)
+    f();
+}
+
 // Inner gap g of the filter's inner list, as a fraction of the skin: at 0.1 (0.1 mm in the settled
 // bed of bench/settled.cpp) the inner list holds 58-63 % of the entries (half of them touch) and
 // few particles move g / 2 in a thousand steps (docs/performance.md, session 12).
@@ -1105,9 +1122,8 @@ void System::compute_forces(bool kick_requested, bool forces_cleared) {
     std::visit(
         [&](const auto& law) {
             using Law = std::decay_t<decltype(law)>;
-#pragma omp parallel num_threads(threads_)
-            {
-            // Pair contacts by chunks of list entries.
+            in_team(threads_, [&] {
+        // Pair contacts by chunks of list entries.
 #pragma omp for schedule(static)
                 for (std::size_t u = 0; u < pair_units; ++u) {
                     const std::size_t begin = u * pair_chunk_size;
@@ -1166,7 +1182,7 @@ void System::compute_forces(bool kick_requested, bool forces_cleared) {
                         half_kick(p0, p1);
                     }
                 }
-            }
+            });
         },
         spec_.contact.law);
 
@@ -1195,11 +1211,13 @@ void System::compute_forces(bool kick_requested, bool forces_cleared) {
         body_forces(body_pairs, body_walls);
         record_body_onsets_ = false;
         if (kick_requested) {
-#pragma omp parallel for num_threads(threads_) schedule(static)
-            for (std::size_t u = 0; u < particle_units; ++u) {
-                const std::size_t p0 = u * particle_unit_size;
-                half_kick(p0, std::min(n, p0 + particle_unit_size));
-            }
+            in_team(threads_, [&] {
+#pragma omp for schedule(static)
+                for (std::size_t u = 0; u < particle_units; ++u) {
+                    const std::size_t p0 = u * particle_unit_size;
+                    half_kick(p0, std::min(n, p0 + particle_unit_size));
+                }
+            });
             rotate_bodies(1, false);
         }
     }
@@ -1398,22 +1416,25 @@ bool System::begin_step(int kicks) {
     KILN_ASSERT(kicks == 1 || kicks == 2);
     double largest = 0.0; // squared displacement since the list build (m^2)
     unit_loose_.resize(units);
-#pragma omp parallel for num_threads(threads_) schedule(static) reduction(max : largest)
-    for (std::size_t u = 0; u < units; ++u) {
-        const std::size_t p0 = u * particle_unit_size;
-        const std::size_t p1 = std::min(n, p0 + particle_unit_size);
-        std::vector<std::uint32_t>& loose = unit_loose_[u];
-        loose.clear();
-        double d2 = 0.0;
-        if (kicks == 2) {
-            d2 = clear ? kick_drift<2, true>(p0, p1, same_size, loose)
-                       : kick_drift<2, false>(p0, p1, same_size, loose);
-        } else {
-            d2 = clear ? kick_drift<1, true>(p0, p1, same_size, loose)
-                       : kick_drift<1, false>(p0, p1, same_size, loose);
+    in_team(threads_, [&] {
+#pragma omp for schedule(static) reduction(max : largest)
+        for (std::size_t u = 0; u < units; ++u) {
+            const std::size_t p0 = u * particle_unit_size;
+            const std::size_t p1 = std::min(n, p0 + particle_unit_size);
+            std::vector<std::uint32_t>& loose = unit_loose_[u];
+            loose.clear();
+            double d2 = 0.0;
+            if (kicks == 2) {
+                d2 = clear ? kick_drift<2, true>(p0, p1, same_size, loose)
+                           : kick_drift<2, false>(p0, p1, same_size, loose);
+            } else {
+                d2 = clear ? kick_drift<1, true>(p0, p1, same_size, loose)
+                           : kick_drift<1, false>(p0, p1, same_size, loose);
+            }
+            largest = std::max(largest, d2);
         }
-        largest = std::max(largest, d2);
-    }
+    });
+
     if (!same_size || largest > lim2) {
         rebuild_neighbours(); // drops the inner lists
     } else {
