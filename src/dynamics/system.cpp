@@ -3,6 +3,7 @@
 #include "contact/contact_law.hpp"
 #include "core/error.hpp"
 #include "core/records_avx512.hpp"
+#include "dynamics/omp_team.hpp"
 #include "dynamics/pair_simd.hpp"
 #include "dynamics/time_step.hpp"
 #include "geometry/rotation.hpp"
@@ -34,23 +35,6 @@ inline double fused(double a, double b, double c) {
 #else
     return a * b + c;
 #endif
-}
-
-/// Runs f, whose loops are orphaned `omp for` constructs, in a team of `threads` threads, or
-/// directly when there is one thread and no enclosing parallel region: there libgomp forms no
-/// team and the loops' implicit barriers return at once, while a team of one thread still ends
-/// each barrier with a system call waking its (absent) waiters, 4 per step of a sphere scene and
-/// 0.6 us each on a virtual machine (docs/performance.md, "Session 28"). The same iterations in
-/// the same order either way, so the same bits.
-template <class F> void in_team(int threads, F&& f) {
-#ifdef _OPENMP
-    if (threads == 1 && !omp_in_parallel()) {
-        f();
-        return;
-    }
-#endif
-#pragma omp parallel num_threads(threads)
-    f();
 }
 
 // Inner gap g of the filter's inner list, as a fraction of the skin: at 0.1 (0.1 mm in the settled
@@ -1122,7 +1106,7 @@ void System::compute_forces(bool kick_requested, bool forces_cleared) {
     std::visit(
         [&](const auto& law) {
             using Law = std::decay_t<decltype(law)>;
-            in_team(threads_, [&] {
+            detail::in_team(threads_, [&] {
         // Pair contacts by chunks of list entries.
 #pragma omp for schedule(static)
                 for (std::size_t u = 0; u < pair_units; ++u) {
@@ -1211,7 +1195,7 @@ void System::compute_forces(bool kick_requested, bool forces_cleared) {
         body_forces(body_pairs, body_walls);
         record_body_onsets_ = false;
         if (kick_requested) {
-            in_team(threads_, [&] {
+            detail::in_team(threads_, [&] {
 #pragma omp for schedule(static)
                 for (std::size_t u = 0; u < particle_units; ++u) {
                     const std::size_t p0 = u * particle_unit_size;
@@ -1416,7 +1400,7 @@ bool System::begin_step(int kicks) {
     KILN_ASSERT(kicks == 1 || kicks == 2);
     double largest = 0.0; // squared displacement since the list build (m^2)
     unit_loose_.resize(units);
-    in_team(threads_, [&] {
+    detail::in_team(threads_, [&] {
 #pragma omp for schedule(static) reduction(max : largest)
         for (std::size_t u = 0; u < units; ++u) {
             const std::size_t p0 = u * particle_unit_size;

@@ -4,6 +4,7 @@
 
 #include "dynamics/system.hpp"
 
+#include "dynamics/omp_team.hpp"
 #include "geometry/rotation.hpp"
 
 #include <algorithm>
@@ -162,29 +163,32 @@ void System::rotate_bodies(int kicks, bool drift) {
     const std::size_t n = bodies_.size();
     const auto runs = static_cast<std::ptrdiff_t>((n + run - 1) / run);
     const bool parallel = parallel_body_passes();
-#pragma omp parallel for num_threads(threads_) schedule(static) if (parallel)
-    for (std::ptrdiff_t r = 0; r < runs; ++r) {
-        const std::size_t b0 = static_cast<std::size_t>(r) * run;
-        const std::size_t b1 = std::min(n, b0 + run);
-        for (std::size_t b = b0; b < b1; ++b) {
-            const std::uint32_t i = bodies_[b];
-            for (int k = 0; k < kicks; ++k) {
-                geometry::kick_angular_momentum(p_.ang_mom[i], p_.torque[i], h);
-            }
-        }
-        if (drift) {
-            geometry::free_rotate_bodies(bodies_.data() + b0, b1 - b0, p_.q.data(), rot_.data(),
-                                         p_.ang_mom.data(), p_.inertia.data(), spec_.time_step);
+    detail::in_team(parallel ? threads_ : 1, [&] {
+#pragma omp for schedule(static)
+        for (std::ptrdiff_t r = 0; r < runs; ++r) {
+            const std::size_t b0 = static_cast<std::size_t>(r) * run;
+            const std::size_t b1 = std::min(n, b0 + run);
             for (std::size_t b = b0; b < b1; ++b) {
                 const std::uint32_t i = bodies_[b];
-                rot_[i] = geometry::unit_rotation_matrix(p_.q[i]);
+                for (int k = 0; k < kicks; ++k) {
+                    geometry::kick_angular_momentum(p_.ang_mom[i], p_.torque[i], h);
+                }
+            }
+            if (drift) {
+                geometry::free_rotate_bodies(bodies_.data() + b0, b1 - b0, p_.q.data(), rot_.data(),
+                                             p_.ang_mom.data(), p_.inertia.data(), spec_.time_step);
+                for (std::size_t b = b0; b < b1; ++b) {
+                    const std::uint32_t i = bodies_[b];
+                    rot_[i] = geometry::unit_rotation_matrix(p_.q[i]);
+                }
+            }
+            for (std::size_t b = b0; b < b1; ++b) {
+                const std::uint32_t i = bodies_[b];
+                p_.omega[i] =
+                    geometry::angular_velocity_world(rot_[i], p_.ang_mom[i], p_.inertia[i]);
             }
         }
-        for (std::size_t b = b0; b < b1; ++b) {
-            const std::uint32_t i = bodies_[b];
-            p_.omega[i] = geometry::angular_velocity_world(rot_[i], p_.ang_mom[i], p_.inertia[i]);
-        }
-    }
+    });
 }
 
 void System::rekey_body_contacts() {
@@ -477,29 +481,33 @@ void System::build_member_pairs() {
     body_rot_build_.assign(rot_.begin(), rot_.end());
     member_reach_.assign(p_.size(), 0.0);
     const auto n_particles = static_cast<std::ptrdiff_t>(p_.size());
-#pragma omp parallel for num_threads(threads_) schedule(static) if (parallel)
-    for (std::ptrdiff_t ii = 0; ii < n_particles; ++ii) {
-        const auto i = static_cast<std::size_t>(ii);
-        double far2 = 0.0;
-        for (std::uint32_t e = element_begin_[i]; e < element_begin_[i + 1]; ++e) {
-            member_x_build_[e] = Vec3(member_c_[e].x, member_c_[e].y, member_c_[e].z);
-            far2 = std::max(far2, (member_x_build_[e] - p_.x[i]).squaredNorm());
+    detail::in_team(parallel ? threads_ : 1, [&] {
+#pragma omp for schedule(static)
+        for (std::ptrdiff_t ii = 0; ii < n_particles; ++ii) {
+            const auto i = static_cast<std::size_t>(ii);
+            double far2 = 0.0;
+            for (std::uint32_t e = element_begin_[i]; e < element_begin_[i + 1]; ++e) {
+                member_x_build_[e] = Vec3(member_c_[e].x, member_c_[e].y, member_c_[e].z);
+                far2 = std::max(far2, (member_x_build_[e] - p_.x[i]).squaredNorm());
+            }
+            member_reach_[i] = std::sqrt(far2);
         }
-        member_reach_[i] = std::sqrt(far2);
-    }
+    });
     // The pairs' histories start empty (written on the threads, as the pairs were found).
     const std::size_t n_pairs = member_pairs_.size();
     member_shear_.resize(n_pairs);
     member_force_.resize(n_pairs);
     member_seen_.resize(n_pairs);
     const auto n_pairs_s = static_cast<std::ptrdiff_t>(n_pairs);
-#pragma omp parallel for num_threads(threads_) schedule(static) if (parallel)
-    for (std::ptrdiff_t k = 0; k < n_pairs_s; ++k) {
-        const auto ku = static_cast<std::size_t>(k);
-        member_shear_[ku] = Vec3::Zero();
-        member_force_[ku] = Vec3::Zero();
-        member_seen_[ku] = -1;
-    }
+    detail::in_team(parallel ? threads_ : 1, [&] {
+#pragma omp for schedule(static)
+        for (std::ptrdiff_t k = 0; k < n_pairs_s; ++k) {
+            const auto ku = static_cast<std::size_t>(k);
+            member_shear_[ku] = Vec3::Zero();
+            member_force_[ku] = Vec3::Zero();
+            member_seen_[ku] = -1;
+        }
+    });
     members_valid_ = true;
 }
 
@@ -561,50 +569,52 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
     bool unexpected = false;         // a particle that is not a clump posed as several elements
     std::exception_ptr posing_error; // the first exception of the posing, if any
     const auto n_particles = static_cast<std::ptrdiff_t>(p_.size());
-#pragma omp parallel for num_threads(threads_) schedule(static, 64)                               \
-    reduction(+ : n_convex) reduction(|| : unexpected) if (parallel_body_passes())
-    for (std::ptrdiff_t pi = 0; pi < n_particles; ++pi) {
-        const auto i = static_cast<std::size_t>(pi);
-        const std::size_t e0 = element_begin_[i];
-        MemberSphere* out = member_c_.data() + e0;
-        const geometry::ShapeTemplate* t = tmpl(static_cast<std::uint32_t>(i));
-        if (t == nullptr) { // a sphere
-            *out = {p_.x[i].x(), p_.x[i].y(), p_.x[i].z(), p_.radius[i]};
-            continue;
-        }
-        if (std::holds_alternative<geometry::Clump>(t->shape)) { // as append_elements
-            static_assert(sizeof(MemberSphere) == 4 * sizeof(double), "x, y, z, r packed");
-            pose_members(p_.x[i], rot_[i], member_columns_[static_cast<std::size_t>(p_.shape[i])],
-                         reinterpret_cast<double*>(out));
-            continue;
-        }
-        const geometry::PolyhedronFeatures* features =
-            !poly_features_[static_cast<std::size_t>(p_.shape[i])].edges.empty()
-                ? &poly_features_[static_cast<std::size_t>(p_.shape[i])]
-                : nullptr;
-        thread_local std::vector<Element> pose_buf; // scratch of posing one particle
-        pose_buf.clear();
-        try { // an exception may not leave a parallel region: it is thrown after the loop
-            append_elements(t, features, p_.x[i], p_.q[i], rot_[i], p_.radius[i], pose_buf);
-        } catch (...) {
-#pragma omp critical(kiln_posing_error)
-            if (!posing_error) {
-                posing_error = std::current_exception();
+    detail::in_team(parallel_body_passes() ? threads_ : 1, [&] {
+#pragma omp for schedule(static, 64) reduction(+ : n_convex) reduction(|| : unexpected)
+        for (std::ptrdiff_t pi = 0; pi < n_particles; ++pi) {
+            const auto i = static_cast<std::size_t>(pi);
+            const std::size_t e0 = element_begin_[i];
+            MemberSphere* out = member_c_.data() + e0;
+            const geometry::ShapeTemplate* t = tmpl(static_cast<std::uint32_t>(i));
+            if (t == nullptr) { // a sphere
+                *out = {p_.x[i].x(), p_.x[i].y(), p_.x[i].z(), p_.radius[i]};
+                continue;
             }
-            continue;
+            if (std::holds_alternative<geometry::Clump>(t->shape)) { // as append_elements
+                static_assert(sizeof(MemberSphere) == 4 * sizeof(double), "x, y, z, r packed");
+                pose_members(p_.x[i], rot_[i],
+                             member_columns_[static_cast<std::size_t>(p_.shape[i])],
+                             reinterpret_cast<double*>(out));
+                continue;
+            }
+            const geometry::PolyhedronFeatures* features =
+                !poly_features_[static_cast<std::size_t>(p_.shape[i])].edges.empty()
+                    ? &poly_features_[static_cast<std::size_t>(p_.shape[i])]
+                    : nullptr;
+            thread_local std::vector<Element> pose_buf; // scratch of posing one particle
+            pose_buf.clear();
+            try { // an exception may not leave a parallel region: it is thrown after the loop
+                append_elements(t, features, p_.x[i], p_.q[i], rot_[i], p_.radius[i], pose_buf);
+            } catch (...) {
+#pragma omp critical(kiln_posing_error)
+                if (!posing_error) {
+                    posing_error = std::current_exception();
+                }
+                continue;
+            }
+            if (pose_buf.size() != 1) {
+                unexpected = true;
+                continue;
+            }
+            const Element& E = pose_buf[0];
+            const bool sphere = E.kind == Element::Kind::sphere;
+            *out = {E.centre.x(), E.centre.y(), E.centre.z(), sphere ? E.radius : 0.0};
+            if (!sphere) {
+                elements_[e0] = E;
+                ++n_convex;
+            }
         }
-        if (pose_buf.size() != 1) {
-            unexpected = true;
-            continue;
-        }
-        const Element& E = pose_buf[0];
-        const bool sphere = E.kind == Element::Kind::sphere;
-        *out = {E.centre.x(), E.centre.y(), E.centre.z(), sphere ? E.radius : 0.0};
-        if (!sphere) {
-            elements_[e0] = E;
-            ++n_convex;
-        }
-    }
+    });
     if (posing_error) {
         std::rethrow_exception(posing_error);
     }
