@@ -801,6 +801,61 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
     out.push_back(e);
 }
 
+void box_pair_contacts(const BoxPairQuery* pairs, std::size_t n, ElementContact* out) {
+    constexpr std::size_t w = geometry::detail::BoxPairLanes::kWidth;
+    geometry::detail::BoxPairLanes lanes;
+    geometry::detail::BoxPairBand band[w];
+    thread_local geometry::NearVertices va;
+    thread_local geometry::NearVertices vb;
+    // A corner of a box (mask: bit k set at +half[k]) in the world, as a clump member is posed.
+    const auto corner = [](const Element& e, const Mat3& rot, unsigned mask) {
+        const Vec3& h = e.poly->box->half;
+        const Vec3 c((mask & 1U) != 0 ? h[0] : -h[0], (mask & 2U) != 0 ? h[1] : -h[1],
+                     (mask & 4U) != 0 ? h[2] : -h[2]);
+        return member_centre(e.centre, rot, c);
+    };
+    for (std::size_t p0 = 0; p0 < n; p0 += w) {
+        const std::size_t count = std::min(w, n - p0);
+        for (std::size_t q = 0; q < count; ++q) {
+            const BoxPairQuery& s = pairs[p0 + q];
+            geometry::detail::box_pair_lane(lanes, q, *s.a->poly, s.a->centre, *s.ra, *s.b->poly,
+                                            s.b->centre, *s.rb);
+        }
+        geometry::detail::box_pair_bands(lanes, count, kTieBand, band);
+        for (std::size_t q = 0; q < count; ++q) {
+            const BoxPairQuery& s = pairs[p0 + q];
+            const geometry::detail::BoxPairBand& o = band[q];
+            ElementContact& ec = out[p0 + q];
+            ec = ElementContact{};
+            if (!o.touching) {
+                continue;
+            }
+            // pair_point's lists: the corners near the support planes, world frame.
+            va.clear();
+            vb.clear();
+            for (int k = 0; k < o.na; ++k) {
+                const auto uk = static_cast<std::size_t>(k);
+                va.emplace_back(corner(*s.a, *s.ra, o.corner_a[uk]), o.weight_a[uk]);
+            }
+            for (int k = 0; k < o.nb; ++k) {
+                const auto uk = static_cast<std::size_t>(k);
+                vb.emplace_back(corner(*s.b, *s.rb, o.corner_b[uk]), o.weight_b[uk]);
+            }
+            // Face on face: the patch's centroid, as polyhedron_pair reads it.
+            Vec3 patch = Vec3::Zero();
+            if (va.size() != 1 && pair_point_needs_patch(va, vb)) {
+                patch = geometry::detail::patch_point({s.a->poly, s.a->centre, s.a->q},
+                                                      {s.b->poly, s.b->centre, s.b->q}, o.normal_a);
+            }
+            ec.touching = true;
+            ec.overlap = o.depth;
+            ec.normal = o.normal;
+            ec.point = pair_point(va, vb, o.normal, o.depth, patch);
+            ec.r_eff = polyhedron_pair_radius(*s.a, *s.b);
+        }
+    }
+}
+
 ElementContact element_contact(const Element& a, const Element& b, NarrowPhase method,
                                const Vec3* warm, Vec3* separating, bool touched_last,
                                geometry::PlaneMemo* memo, bool radius) {

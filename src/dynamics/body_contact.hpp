@@ -167,6 +167,23 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
                                              geometry::PlaneMemo* memo = nullptr,
                                              bool radius = true);
 
+/// One resting pair for box_pair_contacts: two polyhedron elements whose shapes are boxes along
+/// their body axes (geometry::PolyhedronFeatures::Box::aligned), with their rotation matrices
+/// (body -> world, those of their orientations).
+struct BoxPairQuery {
+    const Element* a = nullptr;
+    const Element* b = nullptr;
+    const Mat3* ra = nullptr;
+    const Mat3* rb = nullptr;
+};
+
+/// element_contact of n pairs of boxes with the fast common plane, as for pairs that touched at
+/// the last step and have no cached direction, eight pairs at a time in vector lanes
+/// (geometry::detail::box_pair_bands): the same contacts to round-off (the relative pose from the
+/// rotation matrices, the depth and the near corners in closed form, not from vertex lists),
+/// into out[0..n).
+void box_pair_contacts(const BoxPairQuery* pairs, std::size_t n, ElementContact* out);
+
 /// Is the pair of polyhedron elements a, b apart along `sep` (unit, from b to a, world frame) by
 /// more than the separation margin (1e-10 of the two bounding radii)? The test element_contact
 /// runs first on a polyhedron pair's cached separating direction, for a caller that runs it

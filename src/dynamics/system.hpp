@@ -180,6 +180,11 @@ class System {
     /// the common-plane search evaluates only the candidates that can still win) on (the default)
     /// or off. The results are the same bits either way (tests, A/B).
     void use_plane_memo(bool on) { plane_memo_ = on; }
+    /// Resting pairs of two boxes (both single polyhedra whose faces lie along their body axes,
+    /// touching at the last step, fast common plane) in vector lanes, eight pairs at a time
+    /// (box_pair_contacts; on, the default), or each through element_contact (off, the route
+    /// before session 29, for tests and A/B). The same contacts to round-off.
+    void use_box_lanes(bool on) { box_lanes_ = on; }
     /// The law of contacts with a convex element (polyhedron, superquadric; pairs and plane or
     /// cylinder walls) in blocks of vector lanes (on, the default) or one contact at a time (off,
     /// the route before session 12, for tests and A/B). Same contacts and order; the forces agree
@@ -220,6 +225,9 @@ class System {
     /// Convex pair queries that a cached or searched separating direction answered (no narrow
     /// phase), since construction or restart (not saved in checkpoints).
     [[nodiscard]] long separation_skips() const { return separation_skips_; }
+    /// Box pair queries answered in vector lanes (use_box_lanes), since construction (not saved
+    /// in checkpoints; for tests and A/B).
+    [[nodiscard]] long box_lane_pairs() const { return box_lane_pairs_; }
 
   private:
     /// Sums of one work unit (a chunk of list entries or wall candidates).
@@ -376,6 +384,13 @@ class System {
     // The answers do not depend on it.
     std::vector<geometry::PlaneMemo> plane_memos_;
     bool plane_memo_ = true;
+    // The resting box pairs of one evaluation (body_forces): their queries, the hits they came
+    // from, and their contacts (box_pair_contacts).
+    bool box_lanes_ = true;
+    std::vector<BoxPairQuery> box_queries_;
+    std::vector<std::uint32_t> box_hits_;
+    std::vector<const BodyContact*> box_old_;
+    std::vector<ElementContact> box_found_;
     // Per list entry of two single polyhedra whose cached direction proved them apart: the pose
     // of that proof (overlap along the direction, the direction's component of the centres'
     // difference, both orientations), from which a later step bounds the overlap without the
@@ -411,6 +426,7 @@ class System {
     std::vector<double> wall_apart_below_;
     bool convex_blocks_ = true; // see use_convex_blocks
     long separation_skips_ = 0;
+    long box_lane_pairs_ = 0;
     // Compact histories, parallel to member_pairs_ (docs/architecture.md, "Contact records"): the
     // key of each member pair (ids, element indices in each particle; -1 for a general item), set
     // at the member build; the shear (m) and force on a (N, world) of its contact at the last

@@ -1535,16 +1535,92 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // (Only when there are convex bodies: a scene of clumps and spheres has no narrow
             // phase to run ahead, and the parallel region would cost more than it saves.)
             const bool ahead = threads_ > 1 && n_convex > 0 && n_hits > 1;
-            if (ahead) {
+            // Resting pairs of two boxes go ahead of the serial pass too, on any number of
+            // threads: their narrow phase eight pairs at a time in vector lanes (use_box_lanes).
+            const bool boxes_ahead =
+                box_lanes_ && n_convex > 1 && spec_.narrow_phase == NarrowPhase::newton;
+            if (ahead || boxes_ahead) {
                 ahead_.resize(n_hits);
+                for (AheadPair& s : ahead_) {
+                    s.ready = false;
+                    s.planned = false;
+                }
+            }
+            if (boxes_ahead) {
+                // The pairs: one polyhedron on each side, both boxes along their body axes,
+                // touching at the last step (a record) and without a cached direction, past
+                // single_query's tests up to its narrow phase (the others, and a pair that fails
+                // one, take single_query in the serial pass). The contacts to single_query's
+                // results, in hit order.
+                const auto aligned_box = [&](std::uint32_t e) {
+                    const Element& E = elements_[e];
+                    return !(member_c_[e].r > 0.0) && E.kind == Element::Kind::polyhedron &&
+                           E.poly->box && E.poly->box->aligned;
+                };
+                box_queries_.clear();
+                box_hits_.clear();
+                box_old_.clear();
+                for (std::size_t h = 0; h < n_hits; ++h) {
+                    const MemberPair& m = member_pairs_[member_hits_[h]];
+                    if (m.ea != no_element || !single_convex(m.a, m.b)) {
+                        continue;
+                    }
+                    const std::uint32_t a0 = element_begin_[m.a];
+                    const std::uint32_t b0 = element_begin_[m.b];
+                    if (!aligned_box(a0) || !aligned_box(b0) ||
+                        (separation_cache_ && sep_dirs_[m.k].squaredNorm() > 0.0)) {
+                        continue;
+                    }
+                    const Element& A = elements_[a0];
+                    const Element& B = elements_[b0];
+                    const double rsum = p_.radius[m.a] + p_.radius[m.b];
+                    if ((p_.x[m.a] - p_.x[m.b]).squaredNorm() >= rsum * rsum ||
+                        spheres_apart(A, B, m.a, m.b)) {
+                        continue;
+                    }
+                    // The common plane's own first tests: finite poses, bounding spheres.
+                    const double dist = (B.centre - A.centre).norm();
+                    if (!std::isfinite(dist) || !std::isfinite(A.q.squaredNorm()) ||
+                        !std::isfinite(B.q.squaredNorm()) ||
+                        dist > A.poly->radius + B.poly->radius) {
+                        continue;
+                    }
+                    const BodyContact* old = old_record(ContactGroup(0, m.k, 0, 0), 0);
+                    if (old == nullptr) {
+                        continue;
+                    }
+                    box_queries_.push_back({&A, &B, &rot_[m.a], &rot_[m.b]});
+                    box_hits_.push_back(static_cast<std::uint32_t>(h));
+                    box_old_.push_back(old);
+                }
+                box_found_.resize(box_queries_.size());
+                box_lane_pairs_ += static_cast<long>(box_queries_.size());
+                box_pair_contacts(box_queries_.data(), box_queries_.size(), box_found_.data());
+                for (std::size_t i = 0; i < box_hits_.size(); ++i) {
+                    const std::size_t h = box_hits_[i];
+                    const MemberPair& m = member_pairs_[member_hits_[h]];
+                    AheadPair& s = ahead_[h];
+                    s.counts = {};
+                    s.counts.calls = 1;
+                    s.touching = false;
+                    sep_proofs_[m.k].valid = false;
+                    apart_below_[m.k] = -std::numeric_limits<double>::infinity();
+                    const ElementContact& ec = box_found_[i];
+                    if (ec.touching) {
+                        s.found(m.a, m.b, BodyContactKey{p_.id[m.a], p_.id[m.b], 0, 0}, ec,
+                                box_old_[i],
+                                ec.overlap / ratio_size(*box_queries_[i].a, box_queries_[i].b));
+                    }
+                    s.ready = true;
+                }
+            }
+            if (ahead) {
                 const auto hits = static_cast<std::ptrdiff_t>(n_hits);
 #pragma omp parallel for num_threads(threads_) schedule(dynamic, 16)
                 for (std::ptrdiff_t h = 0; h < hits; ++h) {
                     AheadPair& s = ahead_[static_cast<std::size_t>(h)];
-                    s.ready = false;
-                    s.planned = false;
                     const MemberPair& m = member_pairs_[member_hits_[static_cast<std::size_t>(h)]];
-                    if (m.ea != no_element) {
+                    if (m.ea != no_element || s.ready) {
                         continue;
                     }
                     try {
@@ -1608,7 +1684,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 fetch_memo(h + fetch_ahead / 2, true);
                 const MemberPair& m = member_pairs_[member_hits_[h]];
                 if (m.ea == no_element) {
-                    if (ahead && ahead_[h].ready) {
+                    if ((ahead || boxes_ahead) && ahead_[h].ready) {
                         take_single(m.k, ahead_[h]);
                     } else if (ahead && ahead_[h].planned) {
                         general_entry(m.k, m.a, m.b, find_old, &ahead_[h].plan, false);

@@ -24,6 +24,7 @@
 
 #include "geometry/polyhedron_contact.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <limits>
@@ -281,6 +282,155 @@ void box_planes(const BoxLanes& lanes, std::size_t n, BoxPlane* out) {
         box_plane_end(*lanes.fa[q], *lanes.fb[q], *lanes.rot[q], cm,
                       Vec3(t[0][q], t[1][q], t[2][q]), Vec3(tc[0][q], tc[1][q], tc[2][q]), win[q],
                       w_len[q], o);
+    }
+}
+
+
+void box_pair_lane(BoxPairLanes& lanes, std::size_t q, const PolyhedronFeatures& fa,
+                   const Vec3& xa, const Mat3& ra, const PolyhedronFeatures& fb, const Vec3& xb,
+                   const Mat3& rb) {
+    lanes.fa[q] = &fa;
+    lanes.fb[q] = &fb;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            lanes.ra[3 * i + j][q] = ra(i, j);
+            lanes.rb[3 * i + j][q] = rb(i, j);
+        }
+        lanes.d[i][q] = xb[i] - xa[i];
+        lanes.ha[i][q] = fa.box->half[i];
+        lanes.hb[i][q] = fb.box->half[i];
+    }
+}
+
+void box_pair_bands(BoxPairLanes& lanes, std::size_t n, double fraction, BoxPairBand* out) {
+    constexpr std::size_t w = BoxPairLanes::kWidth;
+    for (std::size_t q = n; q < w; ++q) { // every lane runs the same code: copies of lane 0
+        lanes.fa[q] = lanes.fa[0];
+        lanes.fb[q] = lanes.fb[0];
+        for (int k = 0; k < 9; ++k) {
+            lanes.ra[k][q] = lanes.ra[k][0];
+            lanes.rb[k][q] = lanes.rb[k][0];
+        }
+        for (int k = 0; k < 3; ++k) {
+            lanes.d[k][q] = lanes.d[k][0];
+            lanes.ha[k][q] = lanes.ha[k][0];
+            lanes.hb[k][q] = lanes.hb[k][0];
+        }
+    }
+    const auto& ra = lanes.ra;
+    const auto& rb = lanes.rb;
+    const auto& ha = lanes.ha;
+    const auto& hb = lanes.hb;
+    // The relative pose in A's frame (for aligned boxes A's box frame): C = Ra^T Rb, B's axes,
+    // and t = Ra^T (x_b - x_a), B's centre.
+    BoxLanes box;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+#pragma omp simd
+            for (std::size_t q = 0; q < w; ++q) {
+                box.c[3 * i + j][q] = dot3(ra[i][q], ra[3 + i][q], ra[6 + i][q], rb[j][q],
+                                           rb[3 + j][q], rb[6 + j][q]);
+            }
+        }
+#pragma omp simd
+        for (std::size_t q = 0; q < w; ++q) {
+            box.t[i][q] = dot3(ra[i][q], ra[3 + i][q], ra[6 + i][q], lanes.d[0][q], lanes.d[1][q],
+                               lanes.d[2][q]);
+            box.ha[i][q] = ha[i][q];
+            box.hb[i][q] = hb[i][q];
+        }
+    }
+    Mat3 rel[w]; // C per lane, for the normal of a face of B (box_plane_end)
+    for (std::size_t q = 0; q < n; ++q) {
+        for (int i = 0; i < 3; ++i) {
+            for (int j = 0; j < 3; ++j) {
+                rel[q](i, j) = box.c[3 * i + j][q];
+            }
+        }
+        box.fa[q] = lanes.fa[q];
+        box.fb[q] = lanes.fb[q];
+        box.rot[q] = &rel[q];
+    }
+    BoxPlane plane[w];
+    box_planes(box, n, plane);
+    // Along the normal m (A's frame): A's corner s h (s_k = +-1) is at height sum_k s_k h_k m_k,
+    // lowest where s_k = -sign(m_k), at d_a = -sum_k h_k |m_k|; B's corner t + C (s h) at
+    // m . t + sum_j s_j h_j g_j with g = C^T m, highest at d_b = m . t + sum_j h_j |g_j|. Turning
+    // axis k away from the extreme corner moves a corner by e_k = 2 h_k |m_k| (B: 2 h_j |g_j|).
+    alignas(64) double m[3][w];
+    for (std::size_t q = 0; q < w; ++q) {
+        const Vec3& mq = plane[q < n ? q : 0].normal;
+        m[0][q] = mq[0];
+        m[1][q] = mq[1];
+        m[2][q] = mq[2];
+    }
+    alignas(64) double g[3][w];
+    alignas(64) double ea[3][w];
+    alignas(64) double eb[3][w];
+    alignas(64) double nw[3][w];
+    alignas(64) double depth[w];
+    const auto& c = box.c;
+    const auto& t = box.t;
+#pragma omp simd
+    for (std::size_t q = 0; q < w; ++q) {
+        for (int j = 0; j < 3; ++j) {
+            g[j][q] = dot3(c[j][q], c[3 + j][q], c[6 + j][q], m[0][q], m[1][q], m[2][q]);
+            ea[j][q] = 2.0 * (ha[j][q] * std::abs(m[j][q]));
+            eb[j][q] = 2.0 * (hb[j][q] * std::abs(g[j][q]));
+            nw[j][q] = dot3(ra[3 * j][q], ra[3 * j + 1][q], ra[3 * j + 2][q], m[0][q], m[1][q],
+                            m[2][q]);
+        }
+        const double d_a = -dot3(ha[0][q], ha[1][q], ha[2][q], std::abs(m[0][q]),
+                                 std::abs(m[1][q]), std::abs(m[2][q]));
+        const double d_b =
+            std::fma(hb[2][q], std::abs(g[2][q]),
+                     std::fma(hb[1][q], std::abs(g[1][q]),
+                              std::fma(hb[0][q], std::abs(g[0][q]),
+                                       dot3(m[0][q], m[1][q], m[2][q], t[0][q], t[1][q], t[2][q]))));
+        depth[q] = d_b - d_a;
+    }
+    for (std::size_t q = 0; q < n; ++q) {
+        BoxPairBand& o = out[q];
+        o.best = plane[q].best;
+        o.feature = plane[q].feature;
+        o.candidates = plane[q].candidates;
+        o.normal_a = plane[q].normal;
+        o.normal = Vec3(nw[0][q], nw[1][q], nw[2][q]);
+        o.depth = depth[q];
+        o.touching = !(o.best > 0.0) && o.depth > 0.0;
+        o.na = 0;
+        o.nb = 0;
+        if (!o.touching) {
+            continue;
+        }
+        const double band = fraction * o.depth;
+        unsigned deep_a = 0;
+        unsigned deep_b = 0;
+        for (unsigned k = 0; k < 3; ++k) {
+            deep_a |= m[k][q] < 0.0 ? 1U << k : 0U;
+            deep_b |= g[k][q] > 0.0 ? 1U << k : 0U;
+        }
+        // The corners turned from the extreme one along the axes of `s`, in the order of s (the
+        // extreme corner, s = 0, first); below < band exactly where the weight is positive.
+        const auto near = [band](const double (&e)[3][w], std::size_t lane, unsigned deep,
+                                 std::array<unsigned char, 8>& corner,
+                                 std::array<double, 8>& weight) {
+            int count = 0;
+            for (unsigned s = 0; s < 8; ++s) {
+                double below = 0.0;
+                for (unsigned k = 0; k < 3; ++k) {
+                    below += (s >> k & 1U) != 0 ? e[k][lane] : 0.0;
+                }
+                if (below < band) {
+                    corner[static_cast<std::size_t>(count)] = static_cast<unsigned char>(deep ^ s);
+                    weight[static_cast<std::size_t>(count)] = 1.0 - below / band;
+                    ++count;
+                }
+            }
+            return count;
+        };
+        o.na = near(ea, q, deep_a, o.corner_a, o.weight_a);
+        o.nb = near(eb, q, deep_b, o.corner_b, o.weight_b);
     }
 }
 

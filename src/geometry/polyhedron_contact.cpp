@@ -1007,6 +1007,12 @@ PolyhedronContact polyhedron_contact_with(const PosedPolyhedron& a, const PosedP
     return common_plane(a, b, with_patch, nullptr, scan);
 }
 
+Vec3 patch_point(const PosedPolyhedron& a, const PosedPolyhedron& b, const Vec3& m) {
+    thread_local Relative r;
+    make_relative(a, b, r);
+    return patch_in_a(a, b, r, m, true).point;
+}
+
 } // namespace detail
 
 PolyhedronContact contact_patch_along(const PosedPolyhedron& a, const PosedPolyhedron& b,

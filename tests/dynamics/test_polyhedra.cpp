@@ -655,6 +655,98 @@ TEST(Polyhedra, ConvexBlocksAgreeWithTheOneContactRoute) {
                 compared, worst);
 }
 
+/// Boxes poured into a tube: cubes, cuboids and plates (three boxes along their body axes).
+SceneSpec box_pour() {
+    SceneSpec s = base_scene();
+    s.gravity = Vec3(0, 0, -9.81);
+    s.shapes.push_back(shape("cube"));
+    s.shapes.push_back(shape("cuboid_6x6x5"));
+    s.shapes.push_back(shape("plate_10x9x2"));
+    s.walls.push_back({"floor", PlaneWall{Vec3::Zero(), Vec3::UnitZ()}, 0});
+    s.walls.push_back({"tube", CylinderWall{Vec3::Zero(), Vec3::UnitZ(), 0.012}, 0});
+    // (bottom, top, half width) of each layer's region (m), and its count.
+    const std::array<std::array<double, 3>, 3> region{
+        {{0.002, 0.03, 0.0075}, {0.032, 0.062, 0.006}, {0.064, 0.08, 0.0075}}};
+    const std::array<int, 3> count{48, 2, 1};
+    for (std::size_t k = 0; k < 3; ++k) {
+        InsertSpec ins;
+        const double w = region[k][2];
+        ins.region = {Vec3(-w, -w, region[k][0]), Vec3(w, w, region[k][1])};
+        ins.count = count[k];
+        ins.shape = static_cast<int>(k);
+        ins.size.radius = s.shapes[k].bounding_radius();
+        ins.orientation.random = true;
+        ins.velocity = Vec3(0, 0, k == 0 ? -0.5 : -1.0);
+        s.inserts.push_back(ins);
+    }
+    return s;
+}
+
+TEST(Polyhedra, BoxLanesAgreeWithElementContact) {
+    // Resting pairs of two boxes take their narrow phase eight at a time in vector lanes
+    // (box_pair_contacts: the relative pose from rotation matrices, the closed-form plane, the
+    // depth and the near corners from the half extents), the others element_contact. From the
+    // same state, one step of each route finds the same contacts, with the same geometry and
+    // forces to round-off. Tolerances, from the two routes' arithmetic: the normal to 1e-12 (both
+    // from the same closed form, the relative pose rounded differently, ~1e-16); the overlap to
+    // 1e-12 of the boxes' size s (heights of size ~1 mm differenced: ~1e-19 m); the point to
+    // 1e-12 s + 4 s x 1e-15 s / (0.02 overlap): the band weights 1 - below / band carry a
+    // round-off of the heights (<= 1e-15 s) divided by the band (2 % of the overlap), and move
+    // the point by that times the spread of the near corners (<= 4 s); forces and histories to
+    // 1e-9 of the step's largest (through the point and the overlap). Far below any error of
+    // geometry (a wrong corner or sign moves the point by the size and the overlap by itself).
+    const SceneSpec spec = box_pour();
+    System sys(spec);
+    const double size = 1e-3; // the smallest half extent of the three boxes is about 1 mm
+    long compared = 0;
+    long lanes = 0;
+    double worst_point = 0.0;
+    double worst_overlap = 0.0;
+    double worst_point_tol = 0.0; // the largest point difference as a fraction of its tolerance
+    for (int round = 0; round < 100; ++round) { // 50 000 steps: the pour lands and rests
+        for (int k = 0; k < 499; ++k) {
+            sys.step();
+        }
+        System off = sys;
+        off.use_box_lanes(false);
+        const long lanes0 = sys.box_lane_pairs();
+        sys.step();
+        off.step();
+        lanes += sys.box_lane_pairs() - lanes0;
+        EXPECT_EQ(off.box_lane_pairs(), lanes0); // off: none in lanes
+        const std::vector<BodyContactEntry>& cl = sys.body_contacts();
+        const std::vector<BodyContactEntry>& co = off.body_contacts();
+        ASSERT_EQ(cl.size(), co.size()) << round;
+        double f_max = 0.0;
+        double s_max = 0.0;
+        for (const BodyContactEntry& e : co) {
+            f_max = std::max(f_max, e.contact.force.norm());
+            s_max = std::max(s_max, e.contact.shear.norm());
+        }
+        for (std::size_t i = 0; i < cl.size(); ++i) {
+            const BodyContact& l = cl[i].contact;
+            const BodyContact& o = co[i].contact;
+            ASSERT_TRUE(cl[i].key == co[i].key) << round << " " << i;
+            EXPECT_LE((l.normal - o.normal).norm(), 1e-12) << round << " " << i;
+            EXPECT_LE(std::abs(l.overlap - o.overlap), 1e-12 * size) << round << " " << i;
+            const double point_tol = 1e-12 * size + 4.0 * size * 1e-15 * size / (0.02 * o.overlap);
+            EXPECT_LE((l.point - o.point).norm(), point_tol) << round << " " << i;
+            worst_point_tol = std::max(worst_point_tol, (l.point - o.point).norm() / point_tol);
+            EXPECT_EQ(l.r_eff, o.r_eff);
+            EXPECT_LE((l.force - o.force).norm(), 1e-9 * f_max) << round << " " << i;
+            EXPECT_LE((l.shear - o.shear).norm(), 1e-9 * s_max) << round << " " << i;
+            worst_point = std::max(worst_point, (l.point - o.point).norm() / size);
+            worst_overlap = std::max(worst_overlap, std::abs(l.overlap - o.overlap) / size);
+        }
+        compared += static_cast<long>(cl.size());
+    }
+    EXPECT_GT(lanes, 500); // the route ran (the resting box pairs)
+    EXPECT_GT(compared, 2000);
+    std::printf("%ld element contacts compared, %ld box pairs in lanes; largest differences: "
+                "point %.2g of 1 mm (%.2g of its tolerance), overlap %.2g of 1 mm\n",
+                compared, lanes, worst_point, worst_point_tol, worst_overlap);
+}
+
 TEST(Polyhedra, SavedStateContinuesBitForBit) {
     SceneSpec s = base_scene();
     s.gravity = Vec3(0, 0, -9.81);
