@@ -285,10 +285,8 @@ void box_planes(const BoxLanes& lanes, std::size_t n, BoxPlane* out) {
     }
 }
 
-
-void box_pair_lane(BoxPairLanes& lanes, std::size_t q, const PolyhedronFeatures& fa,
-                   const Vec3& xa, const Mat3& ra, const PolyhedronFeatures& fb, const Vec3& xb,
-                   const Mat3& rb) {
+void box_pair_lane(BoxPairLanes& lanes, std::size_t q, const PolyhedronFeatures& fa, const Vec3& xa,
+                   const Mat3& ra, const PolyhedronFeatures& fb, const Vec3& xb, const Mat3& rb) {
     lanes.fa[q] = &fa;
     lanes.fb[q] = &fb;
     for (int i = 0; i < 3; ++i) {
@@ -377,16 +375,16 @@ void box_pair_bands(BoxPairLanes& lanes, std::size_t n, double fraction, BoxPair
             g[j][q] = dot3(c[j][q], c[3 + j][q], c[6 + j][q], m[0][q], m[1][q], m[2][q]);
             ea[j][q] = 2.0 * (ha[j][q] * std::abs(m[j][q]));
             eb[j][q] = 2.0 * (hb[j][q] * std::abs(g[j][q]));
-            nw[j][q] = dot3(ra[3 * j][q], ra[3 * j + 1][q], ra[3 * j + 2][q], m[0][q], m[1][q],
-                            m[2][q]);
+            nw[j][q] =
+                dot3(ra[3 * j][q], ra[3 * j + 1][q], ra[3 * j + 2][q], m[0][q], m[1][q], m[2][q]);
         }
-        const double d_a = -dot3(ha[0][q], ha[1][q], ha[2][q], std::abs(m[0][q]),
-                                 std::abs(m[1][q]), std::abs(m[2][q]));
-        const double d_b =
-            std::fma(hb[2][q], std::abs(g[2][q]),
-                     std::fma(hb[1][q], std::abs(g[1][q]),
-                              std::fma(hb[0][q], std::abs(g[0][q]),
-                                       dot3(m[0][q], m[1][q], m[2][q], t[0][q], t[1][q], t[2][q]))));
+        const double d_a = -dot3(ha[0][q], ha[1][q], ha[2][q], std::abs(m[0][q]), std::abs(m[1][q]),
+                                 std::abs(m[2][q]));
+        const double d_b = std::fma(
+            hb[2][q], std::abs(g[2][q]),
+            std::fma(hb[1][q], std::abs(g[1][q]),
+                     std::fma(hb[0][q], std::abs(g[0][q]),
+                              dot3(m[0][q], m[1][q], m[2][q], t[0][q], t[1][q], t[2][q]))));
         depth[q] = d_b - d_a;
     }
     for (std::size_t q = 0; q < n; ++q) {
@@ -412,7 +410,7 @@ void box_pair_bands(BoxPairLanes& lanes, std::size_t n, double fraction, BoxPair
         }
         // The corners turned from the extreme one along the axes of `s`, in the order of s (the
         // extreme corner, s = 0, first); below < band exactly where the weight is positive.
-        const auto near = [band](const double (&e)[3][w], std::size_t lane, unsigned deep,
+        const auto near = [band](const double(&e)[3][w], std::size_t lane, unsigned deep,
                                  std::array<unsigned char, 8>& corner,
                                  std::array<double, 8>& weight) {
             int count = 0;

@@ -202,15 +202,14 @@ struct BoxPairLanes {
     alignas(64) double hb[3][kWidth]; ///< B's half extents (m)
 };
 /// Fills lane q for the boxes fa at (xa, ra) and fb at (xb, rb) (body -> world); both aligned.
-void box_pair_lane(BoxPairLanes& lanes, std::size_t q, const PolyhedronFeatures& fa,
-                   const Vec3& xa, const Mat3& ra, const PolyhedronFeatures& fb, const Vec3& xb,
-                   const Mat3& rb);
+void box_pair_lane(BoxPairLanes& lanes, std::size_t q, const PolyhedronFeatures& fa, const Vec3& xa,
+                   const Mat3& ra, const PolyhedronFeatures& fb, const Vec3& xb, const Mat3& rb);
 /// One pair's answer. A corner of a box is a mask of three bits, bit k set for the corner at
 /// +half[k] along body axis k (clear: -half[k]).
 struct BoxPairBand {
-    double best = 0.0;  ///< the closed form's largest separation (m; > 0: apart)
-    double depth = 0.0; ///< distance between the deepest corners along the normal (m)
-    bool touching = false; ///< best <= 0 and depth > 0 (the common plane's test)
+    double best = 0.0;             ///< the closed form's largest separation (m; > 0: apart)
+    double depth = 0.0;            ///< distance between the deepest corners along the normal (m)
+    bool touching = false;         ///< best <= 0 and depth > 0 (the common plane's test)
     Vec3 normal_a = Vec3::UnitX(); ///< unit normal from B to A, A's body frame
     Vec3 normal = Vec3::UnitX();   ///< the same, world frame
     CommonPlaneFeature feature = CommonPlaneFeature::kNone;
