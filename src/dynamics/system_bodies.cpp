@@ -1595,7 +1595,20 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 }
                 box_found_.resize(box_queries_.size());
                 box_lane_pairs_ += static_cast<long>(box_queries_.size());
-                box_pair_contacts(box_queries_.data(), box_queries_.size(), box_found_.data());
+                // In runs of 64 pairs (whole batches of eight), on the threads where there are
+                // several: each pair's answer depends on its own inputs only.
+                constexpr std::size_t box_run = 64;
+                const auto box_runs =
+                    static_cast<std::ptrdiff_t>((box_queries_.size() + box_run - 1) / box_run);
+                detail::in_team(ahead ? threads_ : 1, [&] {
+#pragma omp for schedule(static)
+                    for (std::ptrdiff_t r = 0; r < box_runs; ++r) {
+                        const std::size_t p0 = static_cast<std::size_t>(r) * box_run;
+                        box_pair_contacts(box_queries_.data() + p0,
+                                          std::min(box_run, box_queries_.size() - p0),
+                                          box_found_.data() + p0);
+                    }
+                });
                 for (std::size_t i = 0; i < box_hits_.size(); ++i) {
                     const std::size_t h = box_hits_[i];
                     const MemberPair& m = member_pairs_[member_hits_[h]];
