@@ -60,7 +60,7 @@ constexpr int sectors = 8;
 /// of the 8 sector slopes, 4-6 deg, over sqrt(8): about 2.6 deg), so a pass is not scatter.
 constexpr double min_difference_deg = 5.0;
 /// Largest static overlap allowed (fraction of the diameter): the soft material must not change
-/// the geometry of the heap.
+/// the geometry of the heap (its contacts: grains on the plate; see pour()).
 constexpr double max_overlap = 0.01;
 
 /// Seed of the pour (release points and cube orientations). 34 unless the environment variable
@@ -94,16 +94,17 @@ struct SurfacePoint {
 };
 
 struct Heap {
-    double angle_deg = 0;       ///< slope of the line fitted to all surface points (deg)
-    double sector_spread = 0;   ///< standard deviation of the 8 sector slopes (deg)
-    double slope = 0;           ///< fitted dz/dr (-)
-    double intercept = 0;       ///< fitted z at r = 0 (m)
-    double rest_ratio = 0;      ///< kinetic energy / (n m g d) at the end
-    double end_time = 0;        ///< simulated time at rest (s)
-    double largest_overlap = 0; ///< largest overlap / diameter at the end (-)
-    double apex = 0;            ///< highest grain centre (m)
-    long on_plate = 0;          ///< grains on the plate at the end
-    long failures = 0;          ///< narrow-phase failures (contacts skipped)
+    double angle_deg = 0;         ///< slope of the line fitted to all surface points (deg)
+    double sector_spread = 0;     ///< standard deviation of the 8 sector slopes (deg)
+    double slope = 0;             ///< fitted dz/dr (-)
+    double intercept = 0;         ///< fitted z at r = 0 (m)
+    double rest_ratio = 0;        ///< kinetic energy / (n m g d) at the end
+    double end_time = 0;          ///< simulated time at rest (s)
+    double largest_overlap = 0;   ///< largest overlap / diameter at the end, on the plate (-)
+    double off_plate_overlap = 0; ///< the same among grains that fell off (recorded only)
+    double apex = 0;              ///< highest grain centre (m)
+    long on_plate = 0;            ///< grains on the plate at the end
+    long failures = 0;            ///< narrow-phase failures (contacts skipped)
     std::vector<SurfacePoint> surface;
 };
 
@@ -260,8 +261,15 @@ Heap pour(bool cubes) {
 
     std::vector<dynamics::ContactRecord> contacts;
     sys.collect_contacts(contacts);
+    // The heap's contacts: both grains (or the grain at a wall) on the plate, the rule of
+    // plate_kinetic. A grain that left the plate may still be falling or striking the catch floor
+    // when the heap comes to rest (seed 34 after session 29: one hit it at ~0.8 m/s at the stop,
+    // 2.3 % of d mid-impact, where Hertz gives up to ~8 %); its overlap is recorded apart.
+    const auto on_plate = [&](std::uint32_t i) { return p.x[i].z() >= -1e-3; };
     for (const auto& c : contacts) {
-        out.largest_overlap = std::max(out.largest_overlap, c.overlap / diameter);
+        const bool heap = on_plate(c.i) && (c.wall || on_plate(c.j));
+        double& worst = heap ? out.largest_overlap : out.off_plate_overlap;
+        worst = std::max(worst, c.overlap / diameter);
     }
     return out;
 }
@@ -294,6 +302,8 @@ TEST(AngleOfRepose, CubesPileSteeperThanSpheres) {
         record(name + ": time to rest", h.end_time, 0.0, 0.0, "s");
         record(name + ": E_kin / (n m g d) at the end", h.rest_ratio, 0.0, at_rest, "-");
         record(name + ": largest overlap / d", h.largest_overlap, 0.0, max_overlap, "-");
+        record(name + ": largest overlap / d off the plate (not checked)", h.off_plate_overlap, 0.0,
+               0.0, "-");
         EXPECT_LT(h.rest_ratio, at_rest) << name << " not at rest";
         EXPECT_LT(h.largest_overlap, max_overlap) << name;
         EXPECT_EQ(h.failures, 0) << name;
