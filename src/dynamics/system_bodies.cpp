@@ -1557,6 +1557,27 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     return !(member_c_[e].r > 0.0) && E.kind == Element::Kind::polyhedron &&
                            E.poly->box && E.poly->box->aligned;
                 };
+                // Last step's record of a single-element pair (element 0 of b), as old_record
+                // finds it: the hits come in list order, so their groups mostly rise and a cursor
+                // walks the table (a binary search where one does not).
+                std::size_t seek = 0;
+                const auto seek_old = [&](const ContactGroup& g) -> const BodyContact* {
+                    if (seek < body_groups_.size() && g < body_groups_[seek]) {
+                        seek = static_cast<std::size_t>(
+                            std::lower_bound(body_groups_.begin(), body_groups_.end(), g) -
+                            body_groups_.begin());
+                    }
+                    while (seek < body_groups_.size() && body_groups_[seek] < g) {
+                        ++seek;
+                    }
+                    for (std::size_t r = seek; r < body_groups_.size() && body_groups_[r] == g;
+                         ++r) {
+                        if (body_contacts_[r].key.eb == 0) {
+                            return &body_contacts_[r].contact;
+                        }
+                    }
+                    return nullptr;
+                };
                 box_queries_.clear();
                 box_hits_.clear();
                 box_old_.clear();
@@ -1585,7 +1606,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         dist > A.poly->radius + B.poly->radius) {
                         continue;
                     }
-                    const BodyContact* old = old_record(ContactGroup(0, m.k, 0, 0), 0);
+                    const BodyContact* old = seek_old(ContactGroup(0, m.k, 0, 0));
                     if (old == nullptr) {
                         continue;
                     }
