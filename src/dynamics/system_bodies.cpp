@@ -518,18 +518,23 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
     view_valid_ = false;
     next_contacts_.clear();
     next_groups_.clear();
-    // Last step's records are met in the order they were stored: `cursor` only moves forward.
-    std::size_t cursor = 0;
-    const auto find_old = [&](const ContactGroup& g, std::int32_t eb) -> const BodyContact* {
-        while (cursor < body_groups_.size() && body_groups_[cursor] < g) {
-            ++cursor;
+    // Last step's records are met in the order they were stored: a cursor `at` only moves
+    // forward (the serial pass's is `cursor`; a pass ahead of it keeps its own).
+    const auto record_from = [&](std::size_t& at, const ContactGroup& g,
+                                 std::int32_t eb) -> const BodyContact* {
+        while (at < body_groups_.size() && body_groups_[at] < g) {
+            ++at;
         }
-        for (std::size_t r = cursor; r < body_groups_.size() && body_groups_[r] == g; ++r) {
+        for (std::size_t r = at; r < body_groups_.size() && body_groups_[r] == g; ++r) {
             if (body_contacts_[r].key.eb == eb) {
                 return &body_contacts_[r].contact;
             }
         }
         return nullptr;
+    };
+    std::size_t cursor = 0;
+    const auto find_old = [&](const ContactGroup& g, std::int32_t eb) {
+        return record_from(cursor, g, eb);
     };
     const double dt = spec_.time_step;
     const auto tmpl = [&](std::uint32_t i) -> const geometry::ShapeTemplate* {
@@ -1557,27 +1562,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     return !(member_c_[e].r > 0.0) && E.kind == Element::Kind::polyhedron &&
                            E.poly->box && E.poly->box->aligned;
                 };
-                // Last step's record of a single-element pair (element 0 of b), as old_record
-                // finds it: the hits come in list order, so their groups mostly rise and a cursor
-                // walks the table (a binary search where one does not).
+                // Last step's records: the hits come in the serial pass's order, so a cursor of
+                // the box pass's own walks the table as find_old's does.
                 std::size_t seek = 0;
-                const auto seek_old = [&](const ContactGroup& g) -> const BodyContact* {
-                    if (seek < body_groups_.size() && g < body_groups_[seek]) {
-                        seek = static_cast<std::size_t>(
-                            std::lower_bound(body_groups_.begin(), body_groups_.end(), g) -
-                            body_groups_.begin());
-                    }
-                    while (seek < body_groups_.size() && body_groups_[seek] < g) {
-                        ++seek;
-                    }
-                    for (std::size_t r = seek; r < body_groups_.size() && body_groups_[r] == g;
-                         ++r) {
-                        if (body_contacts_[r].key.eb == 0) {
-                            return &body_contacts_[r].contact;
-                        }
-                    }
-                    return nullptr;
-                };
                 box_queries_.clear();
                 box_hits_.clear();
                 box_old_.clear();
@@ -1606,7 +1593,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         dist > A.poly->radius + B.poly->radius) {
                         continue;
                     }
-                    const BodyContact* old = seek_old(ContactGroup(0, m.k, 0, 0));
+                    const BodyContact* old = record_from(seek, ContactGroup(0, m.k, 0, 0), 0);
                     if (old == nullptr) {
                         continue;
                     }

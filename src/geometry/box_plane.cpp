@@ -389,13 +389,10 @@ void box_pair_bands(BoxPairLanes& lanes, std::size_t n, double fraction, BoxPair
     }
     for (std::size_t q = 0; q < n; ++q) {
         BoxPairBand& o = out[q];
-        o.best = plane[q].best;
-        o.feature = plane[q].feature;
-        o.candidates = plane[q].candidates;
         o.normal_a = plane[q].normal;
         o.normal = Vec3(nw[0][q], nw[1][q], nw[2][q]);
         o.depth = depth[q];
-        o.touching = !(o.best > 0.0) && o.depth > 0.0;
+        o.touching = !(plane[q].best > 0.0) && o.depth > 0.0;
         o.na = 0;
         o.nb = 0;
         if (!o.touching) {

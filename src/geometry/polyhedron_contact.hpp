@@ -207,13 +207,11 @@ void box_pair_lane(BoxPairLanes& lanes, std::size_t q, const PolyhedronFeatures&
 /// One pair's answer. A corner of a box is a mask of three bits, bit k set for the corner at
 /// +half[k] along body axis k (clear: -half[k]).
 struct BoxPairBand {
-    double best = 0.0;             ///< the closed form's largest separation (m; > 0: apart)
-    double depth = 0.0;            ///< distance between the deepest corners along the normal (m)
-    bool touching = false;         ///< best <= 0 and depth > 0 (the common plane's test)
+    double depth = 0.0;    ///< distance between the deepest corners along the normal (m)
+    bool touching = false; ///< the closed form finds no separation and depth > 0 (the common
+                           ///< plane's test)
     Vec3 normal_a = Vec3::UnitX(); ///< unit normal from B to A, A's body frame
     Vec3 normal = Vec3::UnitX();   ///< the same, world frame
-    CommonPlaneFeature feature = CommonPlaneFeature::kNone;
-    int candidates = 0;
     /// Touching only: the corners of A lowest along the normal within `fraction` x depth of the
     /// lowest (B: highest), with the weights 1 - (distance to the extreme) / band, the rule of
     /// band_vertices; the extreme corner first.
