@@ -18,6 +18,9 @@ Mat3 rotation_matrix(const Quat& q) {
 }
 
 Vec3 angular_velocity_world(const Quat& q, const Vec3& L_world, const Vec3& inertia_principal) {
+    if (spherical_top(inertia_principal)) { // as the Mat3 form (rotation.hpp)
+        return L_world * (3.0 / inertia_principal.sum()); // L / spherical_moment, one division
+    }
     const Vec3 l_body = world_to_body(q, L_world);
     return body_to_world(q, l_body.cwiseQuotient(inertia_principal));
 }
@@ -107,11 +110,66 @@ template <bool series_only>
     w /= norm;
 }
 
+/// The exact torque-free flow of a spherical top (spherical_top(I), one moment i: the body turns
+/// about the fixed world L at omega = L / i) on plain numbers: q <- (cos x, sin x L / |L|) q, the
+/// turn in the world frame on the left, with the half angle x = |L| k, k = dt / (2 i). sin(x) / x
+/// and cos(x) from their series in x^2 (no square root; to the terms of sin_cos) where
+/// x <= kSeriesLimit, the library beyond (never with `series_only`, whose caller has checked).
+/// (x, y, z, w) renormalised.
+template <bool series_only>
+[[gnu::always_inline]] inline void spherical_turn(double& x, double& y, double& z, double& w,
+                                                  double l0, double l1, double l2, double k) {
+    const double x2 = (l0 * l0 + l1 * l1 + l2 * l2) * (k * k);
+    double sinc = 1.0 + x2 * (-1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 +
+                                                                     x2 * (1.0 / 362880.0))));
+    double c = 1.0 +
+               x2 * (-0.5 + x2 * (1.0 / 24.0 + x2 * (-1.0 / 720.0 +
+                                                     x2 * (1.0 / 40320.0 + x2 * (-1.0 / 3628800.0)))));
+    if constexpr (!series_only) {
+        if (x2 > kSeriesLimit * kSeriesLimit) {
+            const double a = std::sqrt(x2);
+            sinc = std::sin(a) / a;
+            c = std::cos(a);
+        }
+    }
+    const double f = k * sinc; // v = sin(x) L / |L| = f L
+    const double v0 = f * l0;
+    const double v1 = f * l1;
+    const double v2 = f * l2;
+    const double w1 = c * w - (v0 * x + v1 * y + v2 * z);
+    const double x1 = c * x + w * v0 + (v1 * z - v2 * y);
+    const double y1 = c * y + w * v1 + (v2 * x - v0 * z);
+    const double z1 = c * z + w * v2 + (v0 * y - v1 * x);
+    const double inv = 1.0 / std::sqrt(x1 * x1 + y1 * y1 + z1 * z1 + w1 * w1);
+    x = x1 * inv;
+    y = y1 * inv;
+    z = z1 * inv;
+    w = w1 * inv;
+}
+
+/// Half angle per unit |L| of a spherical top over dt: dt / (2 i).
+inline double spherical_rate(const Vec3& inertia_principal, double dt) {
+    return 0.5 * dt / spherical_moment(inertia_principal);
+}
+
 } // namespace
+
+bool spherical_top(const Vec3& inertia_principal) {
+    return inertia_principal.maxCoeff() - inertia_principal.minCoeff() <=
+           kSphericalTop * inertia_principal.maxCoeff();
+}
 
 void free_rotate(Quat& q, Mat3& rot, const Vec3& L_world, const Vec3& inertia_principal,
                  double dt) {
     KILN_ASSERT((inertia_principal.array() > 0.0).all());
+    if (spherical_top(inertia_principal)) {
+        double qv[4] = {q.x(), q.y(), q.z(), q.w()};
+        spherical_turn<false>(qv[0], qv[1], qv[2], qv[3], L_world.x(), L_world.y(), L_world.z(),
+                              spherical_rate(inertia_principal, dt));
+        q = Quat(qv[3], qv[0], qv[1], qv[2]);
+        rot = unit_rotation_matrix(q);
+        return;
+    }
     const Vec3 l = rot.transpose() * L_world;
     const Vec3 inv_i = inertia_principal.cwiseInverse();
     double qv[4] = {q.x(), q.y(), q.z(), q.w()};
@@ -123,17 +181,21 @@ void free_rotate(Quat& q, Mat3& rot, const Vec3& L_world, const Vec3& inertia_pr
 
 void free_rotate_bodies(const std::uint32_t* index, std::size_t n, Quat* q, const Mat3* rot,
                         const Vec3* L_world, const Vec3* inertia_principal, double dt) {
-    // Bodies by batches of `lanes` in structure-of-arrays form; a batch is evaluated lane-parallel
-    // (vectorised) with the series only, then any body whose half angle could pass kSeriesLimit
-    // (|L| dt / (2 I_min), an upper bound since |L| is kept) is redone alone with the general path.
-    // Lanes past the end are padded with a body at rest, so every batch is the same full loop.
+    // Bodies by batches of `lanes` in structure-of-arrays form, spherical tops (cubes, regular
+    // polyhedra: the exact turn) and the others (the splitting) in batches of their own, taken
+    // from pieces of `piece` bodies; a batch is evaluated lane-parallel (vectorised) with the
+    // series only, then any body whose half angle could pass kSeriesLimit is redone alone with the
+    // general path (splitting: |L| dt / (2 I_min), an upper bound since |L| is kept). Lanes past
+    // the end are padded with a body at rest, so every batch is the same full loop.
     constexpr std::size_t lanes = 8;
-    for (std::size_t b0 = 0; b0 < n; b0 += lanes) {
-        const std::size_t m = std::min(lanes, n - b0);
-        alignas(64) double qv[4][lanes];
-        alignas(64) double l[3][lanes];
-        alignas(64) double inv_i[3][lanes];
-        bool general[lanes] = {};
+    constexpr std::size_t piece = 64;
+    alignas(64) double qv[4][lanes];
+    alignas(64) double l[3][lanes];
+    alignas(64) double inv_i[3][lanes];
+    bool general[lanes];
+    // Batch [b0, b0 + m) of `list` into the lanes: the quaternion, L (world frame for a spherical
+    // top, body frame for the splitting) and 1 / I (spherical: dt / (2 i) in inv_i[0]).
+    const auto load = [&](const std::uint32_t* list, std::size_t m, bool spherical) {
         for (std::size_t b = 0; b < lanes; ++b) {
             if (b >= m) {
                 for (int c = 0; c < 3; ++c) {
@@ -142,32 +204,75 @@ void free_rotate_bodies(const std::uint32_t* index, std::size_t n, Quat* q, cons
                     inv_i[c][b] = 1.0;
                 }
                 qv[3][b] = 1.0;
+                general[b] = false;
                 continue;
             }
-            const std::uint32_t i = index[b0 + b];
+            const std::uint32_t i = list[b];
+            for (int c = 0; c < 3; ++c) {
+                qv[c][b] = q[i].coeffs()[c];
+            }
+            qv[3][b] = q[i].w();
+            if (spherical) {
+                const double k = spherical_rate(inertia_principal[i], dt);
+                for (int c = 0; c < 3; ++c) {
+                    l[c][b] = L_world[i][c];
+                }
+                inv_i[0][b] = k;
+                general[b] = L_world[i].squaredNorm() * (k * k) > kSeriesLimit * kSeriesLimit;
+                continue;
+            }
             const Vec3 lb = rot[i].transpose() * L_world[i];
             const Vec3 ii = inertia_principal[i].cwiseInverse();
             for (int c = 0; c < 3; ++c) {
-                qv[c][b] = q[i].coeffs()[c];
                 l[c][b] = lb[c];
                 inv_i[c][b] = ii[c];
             }
-            qv[3][b] = q[i].w();
             general[b] = L_world[i].norm() * dt * 0.5 * ii.maxCoeff() > kSeriesLimit;
         }
-#pragma omp simd
-        for (std::size_t b = 0; b < lanes; ++b) {
-            split_rotation<true>(qv[0][b], qv[1][b], qv[2][b], qv[3][b], l[0][b], l[1][b], l[2][b],
-                                 inv_i[0][b], inv_i[1][b], inv_i[2][b], dt);
-        }
+    };
+    const auto store = [&](const std::uint32_t* list, std::size_t m) {
         for (std::size_t b = 0; b < m; ++b) {
-            const std::uint32_t i = index[b0 + b];
+            const std::uint32_t i = list[b];
             if (general[b]) {
                 Mat3 r = rot[i];
                 free_rotate(q[i], r, L_world[i], inertia_principal[i], dt);
             } else {
                 q[i] = Quat(qv[3][b], qv[0][b], qv[1][b], qv[2][b]);
             }
+        }
+    };
+    for (std::size_t p0 = 0; p0 < n; p0 += piece) {
+        std::uint32_t top[piece];
+        std::uint32_t other[piece];
+        std::size_t n_top = 0;
+        std::size_t n_other = 0;
+        for (std::size_t b = p0; b < std::min(n, p0 + piece); ++b) {
+            const std::uint32_t i = index[b];
+            if (spherical_top(inertia_principal[i])) {
+                top[n_top++] = i;
+            } else {
+                other[n_other++] = i;
+            }
+        }
+        for (std::size_t b0 = 0; b0 < n_top; b0 += lanes) {
+            const std::size_t m = std::min(lanes, n_top - b0);
+            load(top + b0, m, true);
+#pragma omp simd
+            for (std::size_t b = 0; b < lanes; ++b) {
+                spherical_turn<true>(qv[0][b], qv[1][b], qv[2][b], qv[3][b], l[0][b], l[1][b],
+                                     l[2][b], inv_i[0][b]);
+            }
+            store(top + b0, m);
+        }
+        for (std::size_t b0 = 0; b0 < n_other; b0 += lanes) {
+            const std::size_t m = std::min(lanes, n_other - b0);
+            load(other + b0, m, false);
+#pragma omp simd
+            for (std::size_t b = 0; b < lanes; ++b) {
+                split_rotation<true>(qv[0][b], qv[1][b], qv[2][b], qv[3][b], l[0][b], l[1][b],
+                                     l[2][b], inv_i[0][b], inv_i[1][b], inv_i[2][b], dt);
+            }
+            store(other + b0, m);
         }
     }
 }

@@ -80,10 +80,22 @@ inline void kick_angular_momentum(Vec3& L_world, const Vec3& torque_world, doubl
     L_world += dt * torque_world;
 }
 
+/// Relative spread of the principal moments below which a body is a spherical top (cube,
+/// regular polyhedron: moments equal but for the round-off of their computation).
+inline constexpr double kSphericalTop = 1e-12;
+/// Whether the principal moments (kg m^2) are those of a spherical top (kSphericalTop).
+[[nodiscard]] bool spherical_top(const Vec3& inertia_principal);
+/// The one moment (kg m^2) a spherical top is given: the mean of its three.
+[[nodiscard]] inline double spherical_moment(const Vec3& inertia_principal) {
+    return inertia_principal.sum() / 3.0;
+}
+
 /// Torque-free rotation over dt (s) by the symmetric splitting X(dt/2) Y(dt/2) Z(dt) Y(dt/2)
 /// X(dt/2) (Dullweber et al. 1997). Updates q (body -> world, renormalised); L_world is constant
 /// under free rotation and is therefore not an argument to modify. Inertia in the body frame
-/// (kg m^2, all > 0).
+/// (kg m^2, all > 0). A spherical top (spherical_top) instead turns exactly: about the fixed L at
+/// omega = L / spherical_moment(I), which the splitting only approximates (its sub-rotations do
+/// not commute; error O((omega dt)^3) per step).
 void free_rotate(Quat& q, const Vec3& L_world, const Vec3& inertia_principal, double dt);
 
 /// As above for a body whose rotation matrix is kept alongside q: `rot` is R(q) (body -> world)
@@ -105,6 +117,9 @@ void free_rotate_bodies(const std::uint32_t* index, std::size_t n, Quat* q, cons
 /// momentum (kg m^2/s) and the principal moments (kg m^2, body frame): R diag(1/I) R^T L.
 [[nodiscard]] inline Vec3 angular_velocity_world(const Mat3& rot, const Vec3& L_world,
                                                  const Vec3& inertia_principal) {
+    if (spherical_top(inertia_principal)) {
+        return L_world * (3.0 / inertia_principal.sum()); // L / spherical_moment, one division
+    }
     const Vec3 l_body = rot.transpose() * L_world;
     return rot * l_body.cwiseQuotient(inertia_principal);
 }

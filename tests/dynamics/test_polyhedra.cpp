@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <gtest/gtest.h>
 #include <limits>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <random>
@@ -690,9 +691,11 @@ TEST(Polyhedra, BoxLanesAgreeWithElementContact) {
     // forces to round-off. Tolerances, from the two routes' arithmetic: the normal to 1e-12 (both
     // from the same closed form, the relative pose rounded differently, ~1e-16); the overlap to
     // 1e-12 of the boxes' size s (heights of size ~1 mm differenced: ~1e-19 m); the point to
-    // 1e-12 s + 4 s x 1e-15 s / (0.02 overlap): the band weights 1 - below / band carry a
-    // round-off of the heights (<= 1e-15 s) divided by the band (2 % of the overlap), and move
-    // the point by that times the spread of the near corners (<= 4 s); forces and histories to
+    // 1e-12 s + 2 R x 1e-15 R / (0.02 overlap), R the pair's reach (the sum of the bodies'
+    // bounding radii): the band weights 1 - below / band carry a round-off of the corners'
+    // heights, which both routes compute from coordinates of up to R in A's frame (a few
+    // roundings: <= 1e-15 R), divided by the band (2 % of the overlap), and move the point by
+    // that times the spread of the near corners (a body's diameter, <= 2 R); forces and histories to
     // 1e-9 of the step's largest (through the point and the overlap). Far below any error of
     // geometry (a wrong corner or sign moves the point by the size and the overlap by itself).
     const SceneSpec spec = box_pour();
@@ -723,13 +726,21 @@ TEST(Polyhedra, BoxLanesAgreeWithElementContact) {
             f_max = std::max(f_max, e.contact.force.norm());
             s_max = std::max(s_max, e.contact.shear.norm());
         }
+        const ParticleStore& p = sys.particles();
+        std::map<std::int64_t, double> radius; // by id
+        for (std::size_t i = 0; i < p.size(); ++i) {
+            radius[p.id[i]] = p.radius[i];
+        }
         for (std::size_t i = 0; i < cl.size(); ++i) {
             const BodyContact& l = cl[i].contact;
             const BodyContact& o = co[i].contact;
             ASSERT_TRUE(cl[i].key == co[i].key) << round << " " << i;
+            const BodyContactKey& key = cl[i].key;
+            const double reach = radius.at(key.a) + (key.b >= 0 ? radius.at(key.b) : 0.0);
             EXPECT_LE((l.normal - o.normal).norm(), 1e-12) << round << " " << i;
             EXPECT_LE(std::abs(l.overlap - o.overlap), 1e-12 * size) << round << " " << i;
-            const double point_tol = 1e-12 * size + 4.0 * size * 1e-15 * size / (0.02 * o.overlap);
+            const double point_tol =
+                1e-12 * size + 2.0 * reach * 1e-15 * reach / (0.02 * o.overlap);
             EXPECT_LE((l.point - o.point).norm(), point_tol) << round << " " << i;
             worst_point_tol = std::max(worst_point_tol, (l.point - o.point).norm() / point_tol);
             EXPECT_EQ(l.r_eff, o.r_eff);
