@@ -802,18 +802,15 @@ void append_elements(const geometry::ShapeTemplate* t, const geometry::Polyhedro
 }
 
 void box_pair_contacts(const BoxPairQuery* pairs, std::size_t n, ElementContact* out) {
+    // pair_point's rule in the lanes. A box's corners near its support plane are the extreme
+    // corner and those turned from it along the axes whose turn (ea[k]) stays within the band:
+    // no such axis, the corner alone; one, the extreme corner (weight 1) and its neighbour
+    // (weight 1 - ea[k] / band): an edge; two or more, at least three corners: a face, whose
+    // contact point is the patch's centroid (computed per pair only where both bodies have one).
     constexpr std::size_t w = geometry::detail::BoxPairLanes::kWidth;
     geometry::detail::BoxPairLanes lanes;
-    geometry::detail::BoxPairBand band[w];
-    thread_local geometry::NearVertices va;
-    thread_local geometry::NearVertices vb;
-    // A corner of a box (mask: bit k set at +half[k]) in the world, as a clump member is posed.
-    const auto corner = [](const Element& e, const Mat3& rot, unsigned mask) {
-        const Vec3& h = e.poly->box->half;
-        const Vec3 c((mask & 1U) != 0 ? h[0] : -h[0], (mask & 2U) != 0 ? h[1] : -h[1],
-                     (mask & 4U) != 0 ? h[2] : -h[2]);
-        return member_centre(e.centre, rot, c);
-    };
+    alignas(64) double point[3][w];
+    alignas(64) int patch[w];
     for (std::size_t p0 = 0; p0 < n; p0 += w) {
         const std::size_t count = std::min(w, n - p0);
         for (std::size_t q = 0; q < count; ++q) {
@@ -821,36 +818,92 @@ void box_pair_contacts(const BoxPairQuery* pairs, std::size_t n, ElementContact*
             geometry::detail::box_pair_lane(lanes, q, *s.a->poly, s.a->centre, *s.ra, *s.b->poly,
                                             s.b->centre, *s.rb);
         }
-        geometry::detail::box_pair_bands(lanes, count, kTieBand, band);
+        geometry::detail::box_pair_planes(lanes, count);
+        const auto& ra = lanes.ra;
+        const auto& rb = lanes.rb;
+#pragma omp simd
+        for (std::size_t q = 0; q < w; ++q) {
+            const double depth = lanes.depth[q];
+            const double band = kTieBand * depth;
+            // Per body: the axes within the band, and for one such axis the neighbour's offset
+            // from the extreme corner (world; -2 c_k along the body's axis k) and its weight.
+            int low_a = 0;
+            int low_b = 0;
+            double off_a[3] = {0.0, 0.0, 0.0};
+            double off_b[3] = {0.0, 0.0, 0.0};
+            double wa = 0.0;
+            double wb = 0.0;
+            for (int k = 0; k < 3; ++k) {
+                const bool in_a = lanes.ea[k][q] < band;
+                const bool in_b = lanes.eb[k][q] < band;
+                low_a += in_a ? 1 : 0;
+                low_b += in_b ? 1 : 0;
+                wa = in_a ? 1.0 - lanes.ea[k][q] / band : wa;
+                wb = in_b ? 1.0 - lanes.eb[k][q] / band : wb;
+                for (int i = 0; i < 3; ++i) {
+                    off_a[i] = in_a ? -2.0 * lanes.corner_a[k][q] * ra[3 * i + k][q] : off_a[i];
+                    off_b[i] = in_b ? -2.0 * lanes.corner_b[k][q] * rb[3 * i + k][q] : off_b[i];
+                }
+            }
+            double pa[3];
+            double pb[3];
+            double nw[3];
+            double avg_a[3];
+            double avg_b[3];
+            for (int i = 0; i < 3; ++i) {
+                pa[i] = lanes.point_a[i][q];
+                pb[i] = lanes.point_b[i][q];
+                nw[i] = lanes.normal[i][q];
+                // The two corners' weighted average: (p + w (p + off)) / (1 + w).
+                avg_a[i] = pa[i] + wa / (1.0 + wa) * off_a[i];
+                avg_b[i] = pb[i] + wb / (1.0 + wb) * off_b[i];
+            }
+            // Two edges: the closest points of the segments (pair_point's form).
+            const double r[3] = {pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]};
+            const double aa = off_a[0] * off_a[0] + off_a[1] * off_a[1] + off_a[2] * off_a[2];
+            const double ee = off_b[0] * off_b[0] + off_b[1] * off_b[1] + off_b[2] * off_b[2];
+            const double bb = off_a[0] * off_b[0] + off_a[1] * off_b[1] + off_a[2] * off_b[2];
+            const double cc = off_a[0] * r[0] + off_a[1] * r[1] + off_a[2] * r[2];
+            const double ff = off_b[0] * r[0] + off_b[1] * r[1] + off_b[2] * r[2];
+            const double denom = aa * ee - bb * bb;
+            const bool crossing = low_a == 1 && low_b == 1 && denom > 1e-12 * aa * ee;
+            // Divisors kept finite in lanes that do not use them.
+            const double den = crossing ? denom : 1.0;
+            const double aa1 = crossing ? aa : 1.0;
+            const double ee1 = crossing ? ee : 1.0;
+            const double ss = std::clamp((bb * ff - cc * ee) / den, 0.0, 1.0);
+            const double tt = std::clamp((bb * ss + ff) / ee1, 0.0, 1.0);
+            const double s2 = std::clamp((bb * tt - cc) / aa1, 0.0, 1.0);
+            const double half = 0.5 * depth;
+            for (int i = 0; i < 3; ++i) {
+                const double edges = crossing
+                                         ? 0.5 * (pa[i] + s2 * off_a[i] + pb[i] + tt * off_b[i])
+                                         : 0.5 * (avg_a[i] + avg_b[i]);
+                point[i][q] = low_a == 0                 ? pa[i] + half * nw[i]
+                              : low_b == 0               ? pb[i] - half * nw[i]
+                              : low_a == 1 && low_b == 1 ? edges
+                              : low_a == 1               ? avg_a[i] + half * nw[i]
+                              : low_b == 1               ? avg_b[i] - half * nw[i]
+                                                         : 0.0;
+            }
+            patch[q] = low_a >= 2 && low_b >= 2 ? 1 : 0;
+        }
         for (std::size_t q = 0; q < count; ++q) {
             const BoxPairQuery& s = pairs[p0 + q];
-            const geometry::detail::BoxPairBand& o = band[q];
             ElementContact& ec = out[p0 + q];
             ec = ElementContact{};
-            if (!o.touching) {
+            if (lanes.touching[q] == 0) {
                 continue;
             }
-            // pair_point's lists: the corners near the support planes, world frame.
-            va.clear();
-            vb.clear();
-            for (int k = 0; k < o.na; ++k) {
-                const auto uk = static_cast<std::size_t>(k);
-                va.emplace_back(corner(*s.a, *s.ra, o.corner_a[uk]), o.weight_a[uk]);
-            }
-            for (int k = 0; k < o.nb; ++k) {
-                const auto uk = static_cast<std::size_t>(k);
-                vb.emplace_back(corner(*s.b, *s.rb, o.corner_b[uk]), o.weight_b[uk]);
-            }
-            // Face on face: the patch's centroid, as polyhedron_pair reads it.
-            Vec3 patch = Vec3::Zero();
-            if (va.size() != 1 && pair_point_needs_patch(va, vb)) {
-                patch = geometry::detail::patch_point({s.a->poly, s.a->centre, s.a->q},
-                                                      {s.b->poly, s.b->centre, s.b->q}, o.normal_a);
-            }
             ec.touching = true;
-            ec.overlap = o.depth;
-            ec.normal = o.normal;
-            ec.point = pair_point(va, vb, o.normal, o.depth, patch);
+            ec.overlap = lanes.depth[q];
+            ec.normal = Vec3(lanes.normal[0][q], lanes.normal[1][q], lanes.normal[2][q]);
+            ec.point =
+                patch[q] != 0
+                    ? geometry::detail::patch_point(
+                          {s.a->poly, s.a->centre, s.a->q}, {s.b->poly, s.b->centre, s.b->q},
+                          Vec3(lanes.normal_a[0][q], lanes.normal_a[1][q], lanes.normal_a[2][q]))
+                    : Vec3(point[0][q], point[1][q], point[2][q]);
             ec.r_eff = polyhedron_pair_radius(*s.a, *s.b);
         }
     }

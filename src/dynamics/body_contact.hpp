@@ -179,9 +179,10 @@ struct BoxPairQuery {
 
 /// element_contact of n pairs of boxes with the fast common plane, as for pairs that touched at
 /// the last step and have no cached direction, eight pairs at a time in vector lanes
-/// (geometry::detail::box_pair_bands): the same contacts to round-off (the relative pose from the
-/// rotation matrices, the depth and the near corners in closed form, not from vertex lists),
-/// into out[0..n).
+/// (geometry::detail::box_pair_planes, then pair_point's rule by selects): the same contacts to
+/// round-off (the relative pose from the rotation matrices, the depth, the near corners and the
+/// point in closed form, not from vertex lists; a face-on-face pair's patch pair by pair), into
+/// out[0..n).
 void box_pair_contacts(const BoxPairQuery* pairs, std::size_t n, ElementContact* out);
 
 /// Is the pair of polyhedron elements a, b apart along `sep` (unit, from b to a, world frame) by

@@ -191,48 +191,78 @@ void box_lane(BoxLanes& lanes, std::size_t q, const PolyhedronFeatures& fa,
     }
 }
 
-void box_planes(const BoxLanes& lanes, std::size_t n, BoxPlane* out) {
-    constexpr std::size_t w = BoxLanes::kWidth;
-    alignas(64) double top[w];
-    alignas(64) double w_len[w];
-    alignas(64) double tc[3][w];
-    alignas(64) int win[w];
-    alignas(64) int count[w];
-    const auto& c = lanes.c;
-    const auto& t = lanes.t;
-    const auto& ha = lanes.ha;
-    const auto& hb = lanes.hb;
-    // The one-pair form's candidates and comparisons in its order, candidate by candidate across
-    // the lanes; a candidate replaces a lane's running best where the one-pair form's test holds
-    // (no branch). Lanes past n hold whatever their inputs are; their results are not read.
+namespace {
+
+constexpr std::size_t kW = BoxLanes::kWidth;
+
+/// The running winner of the closed form in lanes: the largest separation (top), the candidate
+/// (win, as box_plane_end reads it), the winning edge direction's length, B's centre along B's
+/// axes (tc) and the number of candidates; with the direction (`track`): the winner's unit
+/// direction u in A's box frame and whether the normal from B to A is -u (flip), by
+/// box_plane_end's rules (a face of A: flip where t_i >= 0; of B: where tc_j > 0; an edge pair:
+/// where n . t > 0).
+struct PlaneRun {
+    alignas(64) double top[kW];
+    alignas(64) double w_len[kW];
+    alignas(64) double tc[3][kW];
+    alignas(64) int win[kW];
+    alignas(64) int count[kW];
+    alignas(64) double u[3][kW];
+    alignas(64) int flip[kW];
+};
+
+/// box_plane's candidates and comparisons in its order, candidate by candidate across the lanes;
+/// a candidate replaces a lane's running best where the one-pair form's test holds (no branch).
+/// Lanes past the pairs in use hold whatever their inputs are; their results are not read.
+template <bool track>
+void plane_candidates(const double (&c)[9][kW], const double (&t)[3][kW], const double (&ha)[3][kW],
+                      const double (&hb)[3][kW], PlaneRun& r) {
 #pragma omp simd
-    for (std::size_t q = 0; q < w; ++q) {
-        top[q] = -std::numeric_limits<double>::infinity();
-        win[q] = -1;
-        w_len[q] = 1.0;
-        count[q] = 6;
+    for (std::size_t q = 0; q < kW; ++q) {
+        r.top[q] = -std::numeric_limits<double>::infinity();
+        r.win[q] = -1;
+        r.w_len[q] = 1.0;
+        r.count[q] = 6;
+        if constexpr (track) {
+            r.u[0][q] = 1.0;
+            r.u[1][q] = 0.0;
+            r.u[2][q] = 0.0;
+            r.flip[q] = 0;
+        }
     }
     for (int i = 0; i < 3; ++i) {
 #pragma omp simd
-        for (std::size_t q = 0; q < w; ++q) {
+        for (std::size_t q = 0; q < kW; ++q) {
             const double sep =
                 face_separation(t[i][q], ha[i][q], std::abs(c[3 * i][q]), std::abs(c[3 * i + 1][q]),
                                 std::abs(c[3 * i + 2][q]), hb[0][q], hb[1][q], hb[2][q]);
-            const bool g = sep > top[q];
-            top[q] = g ? sep : top[q];
-            win[q] = g ? i : win[q];
+            const bool g = sep > r.top[q];
+            r.top[q] = g ? sep : r.top[q];
+            r.win[q] = g ? i : r.win[q];
+            if constexpr (track) { // e_i
+                for (int k = 0; k < 3; ++k) {
+                    r.u[k][q] = g ? (k == i ? 1.0 : 0.0) : r.u[k][q];
+                }
+                r.flip[q] = g ? (t[i][q] >= 0.0 ? 1 : 0) : r.flip[q];
+            }
         }
     }
     for (int j = 0; j < 3; ++j) {
 #pragma omp simd
-        for (std::size_t q = 0; q < w; ++q) {
-            tc[j][q] = dot3(c[j][q], c[3 + j][q], c[6 + j][q], t[0][q], t[1][q], t[2][q]);
+        for (std::size_t q = 0; q < kW; ++q) {
+            r.tc[j][q] = dot3(c[j][q], c[3 + j][q], c[6 + j][q], t[0][q], t[1][q], t[2][q]);
             const double sep =
-                face_separation(tc[j][q], hb[j][q], std::abs(c[j][q]), std::abs(c[3 + j][q]),
+                face_separation(r.tc[j][q], hb[j][q], std::abs(c[j][q]), std::abs(c[3 + j][q]),
                                 std::abs(c[6 + j][q]), ha[0][q], ha[1][q], ha[2][q]);
-            const bool g = sep > top[q];
-            top[q] = g ? sep : top[q];
-            win[q] = g ? 3 + j : win[q];
+            const bool g = sep > r.top[q];
+            r.top[q] = g ? sep : r.top[q];
+            r.win[q] = g ? 3 + j : r.win[q];
+            if constexpr (track) { // B's axis j: column j of C
+                for (int k = 0; k < 3; ++k) {
+                    r.u[k][q] = g ? c[3 * k + j][q] : r.u[k][q];
+                }
+                r.flip[q] = g ? (r.tc[j][q] > 0.0 ? 1 : 0) : r.flip[q];
+            }
         }
     }
     for (int i = 0; i < 3; ++i) {
@@ -244,31 +274,50 @@ void box_planes(const BoxLanes& lanes, std::size_t n, BoxPlane* out) {
             const int id = 6 + 3 * i + j;
             // The division only where a lane's candidate wins (rare in a resting pile, where
             // face planes win): first the tests, then the quotients if any lane needs one.
-            alignas(64) double num[w];
-            alignas(64) double len[w];
-            alignas(64) int g[w];
+            alignas(64) double num[kW];
+            alignas(64) double len[kW];
+            alignas(64) int g[kW];
             int wins = 0;
 #pragma omp simd reduction(+ : wins)
-            for (std::size_t q = 0; q < w; ++q) {
+            for (std::size_t q = 0; q < kW; ++q) {
                 edge_candidate(-c[3 * i2 + j][q], c[3 * i1 + j][q], t[i1][q], t[i2][q], ha[i1][q],
                                ha[i2][q], c[3 * i1 + j1][q], c[3 * i2 + j1][q], c[3 * i1 + j2][q],
                                c[3 * i2 + j2][q], hb[j1][q], hb[j2][q], num[q], len[q]);
                 const bool valid = !(len[q] <= 1e-12);
-                count[q] += valid ? 1 : 0;
-                g[q] = valid && num[q] > top[q] * len[q] ? 1 : 0;
+                r.count[q] += valid ? 1 : 0;
+                g[q] = valid && num[q] > r.top[q] * len[q] ? 1 : 0;
                 wins += g[q];
             }
             if (wins == 0) {
                 continue;
             }
 #pragma omp simd
-            for (std::size_t q = 0; q < w; ++q) {
-                top[q] = g[q] != 0 ? num[q] / len[q] : top[q];
-                win[q] = g[q] != 0 ? id : win[q];
-                w_len[q] = g[q] != 0 ? len[q] : w_len[q];
+            for (std::size_t q = 0; q < kW; ++q) {
+                const bool gq = g[q] != 0;
+                r.top[q] = gq ? num[q] / len[q] : r.top[q];
+                r.win[q] = gq ? id : r.win[q];
+                r.w_len[q] = gq ? len[q] : r.w_len[q];
+                if constexpr (track) { // e_i x C_j: (n1 along i1, n2 along i2) / len
+                    const double n1 = -c[3 * i2 + j][q];
+                    const double n2 = c[3 * i1 + j][q];
+                    r.u[i][q] = gq ? 0.0 : r.u[i][q];
+                    r.u[i1][q] = gq ? n1 / len[q] : r.u[i1][q];
+                    r.u[i2][q] = gq ? n2 / len[q] : r.u[i2][q];
+                    r.flip[q] =
+                        gq ? (std::fma(n1, t[i1][q], n2 * t[i2][q]) > 0.0 ? 1 : 0) : r.flip[q];
+                }
             }
         }
     }
+}
+
+} // namespace
+
+void box_planes(const BoxLanes& lanes, std::size_t n, BoxPlane* out) {
+    PlaneRun r;
+    plane_candidates<false>(lanes.c, lanes.t, lanes.ha, lanes.hb, r);
+    const auto& c = lanes.c;
+    const auto& t = lanes.t;
     for (std::size_t q = 0; q < n; ++q) {
         Mat3 cm;
         for (int i = 0; i < 3; ++i) {
@@ -277,39 +326,37 @@ void box_planes(const BoxLanes& lanes, std::size_t n, BoxPlane* out) {
             }
         }
         BoxPlane& o = out[q];
-        o.best = top[q];
-        o.candidates = count[q];
+        o.best = r.top[q];
+        o.candidates = r.count[q];
         box_plane_end(*lanes.fa[q], *lanes.fb[q], *lanes.rot[q], cm,
-                      Vec3(t[0][q], t[1][q], t[2][q]), Vec3(tc[0][q], tc[1][q], tc[2][q]), win[q],
-                      w_len[q], o);
+                      Vec3(t[0][q], t[1][q], t[2][q]), Vec3(r.tc[0][q], r.tc[1][q], r.tc[2][q]),
+                      r.win[q], r.w_len[q], o);
     }
 }
 
 void box_pair_lane(BoxPairLanes& lanes, std::size_t q, const PolyhedronFeatures& fa, const Vec3& xa,
                    const Mat3& ra, const PolyhedronFeatures& fb, const Vec3& xb, const Mat3& rb) {
-    lanes.fa[q] = &fa;
-    lanes.fb[q] = &fb;
     for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) {
             lanes.ra[3 * i + j][q] = ra(i, j);
             lanes.rb[3 * i + j][q] = rb(i, j);
         }
+        lanes.xa[i][q] = xa[i];
         lanes.d[i][q] = xb[i] - xa[i];
         lanes.ha[i][q] = fa.box->half[i];
         lanes.hb[i][q] = fb.box->half[i];
     }
 }
 
-void box_pair_bands(BoxPairLanes& lanes, std::size_t n, double fraction, BoxPairBand* out) {
+void box_pair_planes(BoxPairLanes& lanes, std::size_t n) {
     constexpr std::size_t w = BoxPairLanes::kWidth;
     for (std::size_t q = n; q < w; ++q) { // every lane runs the same code: copies of lane 0
-        lanes.fa[q] = lanes.fa[0];
-        lanes.fb[q] = lanes.fb[0];
         for (int k = 0; k < 9; ++k) {
             lanes.ra[k][q] = lanes.ra[k][0];
             lanes.rb[k][q] = lanes.rb[k][0];
         }
         for (int k = 0; k < 3; ++k) {
+            lanes.xa[k][q] = lanes.xa[k][0];
             lanes.d[k][q] = lanes.d[k][0];
             lanes.ha[k][q] = lanes.ha[k][0];
             lanes.hb[k][q] = lanes.hb[k][0];
@@ -321,111 +368,64 @@ void box_pair_bands(BoxPairLanes& lanes, std::size_t n, double fraction, BoxPair
     const auto& hb = lanes.hb;
     // The relative pose in A's frame (for aligned boxes A's box frame): C = Ra^T Rb, B's axes,
     // and t = Ra^T (x_b - x_a), B's centre.
-    BoxLanes box;
+    alignas(64) double c[9][w];
+    alignas(64) double t[3][w];
     for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) {
 #pragma omp simd
             for (std::size_t q = 0; q < w; ++q) {
-                box.c[3 * i + j][q] = dot3(ra[i][q], ra[3 + i][q], ra[6 + i][q], rb[j][q],
-                                           rb[3 + j][q], rb[6 + j][q]);
+                c[3 * i + j][q] = dot3(ra[i][q], ra[3 + i][q], ra[6 + i][q], rb[j][q], rb[3 + j][q],
+                                       rb[6 + j][q]);
             }
         }
 #pragma omp simd
         for (std::size_t q = 0; q < w; ++q) {
-            box.t[i][q] = dot3(ra[i][q], ra[3 + i][q], ra[6 + i][q], lanes.d[0][q], lanes.d[1][q],
-                               lanes.d[2][q]);
-            box.ha[i][q] = ha[i][q];
-            box.hb[i][q] = hb[i][q];
+            t[i][q] = dot3(ra[i][q], ra[3 + i][q], ra[6 + i][q], lanes.d[0][q], lanes.d[1][q],
+                           lanes.d[2][q]);
         }
     }
-    Mat3 rel[w]; // C per lane, for the normal of a face of B (box_plane_end)
-    for (std::size_t q = 0; q < n; ++q) {
-        for (int i = 0; i < 3; ++i) {
-            for (int j = 0; j < 3; ++j) {
-                rel[q](i, j) = box.c[3 * i + j][q];
-            }
-        }
-        box.fa[q] = lanes.fa[q];
-        box.fb[q] = lanes.fb[q];
-        box.rot[q] = &rel[q];
-    }
-    BoxPlane plane[w];
-    box_planes(box, n, plane);
+    PlaneRun r;
+    plane_candidates<true>(c, t, ha, hb, r);
     // Along the normal m (A's frame): A's corner s h (s_k = +-1) is at height sum_k s_k h_k m_k,
     // lowest where s_k = -sign(m_k), at d_a = -sum_k h_k |m_k|; B's corner t + C (s h) at
     // m . t + sum_j s_j h_j g_j with g = C^T m, highest at d_b = m . t + sum_j h_j |g_j|. Turning
     // axis k away from the extreme corner moves a corner by e_k = 2 h_k |m_k| (B: 2 h_j |g_j|).
-    alignas(64) double m[3][w];
-    for (std::size_t q = 0; q < w; ++q) {
-        const Vec3& mq = plane[q < n ? q : 0].normal;
-        m[0][q] = mq[0];
-        m[1][q] = mq[1];
-        m[2][q] = mq[2];
-    }
-    alignas(64) double g[3][w];
-    alignas(64) double ea[3][w];
-    alignas(64) double eb[3][w];
-    alignas(64) double nw[3][w];
-    alignas(64) double depth[w];
-    const auto& c = box.c;
-    const auto& t = box.t;
+    auto& m = lanes.normal_a;
 #pragma omp simd
     for (std::size_t q = 0; q < w; ++q) {
+        double g[3];
+        for (int k = 0; k < 3; ++k) {
+            m[k][q] = r.flip[q] != 0 ? -r.u[k][q] : r.u[k][q];
+        }
         for (int j = 0; j < 3; ++j) {
-            g[j][q] = dot3(c[j][q], c[3 + j][q], c[6 + j][q], m[0][q], m[1][q], m[2][q]);
-            ea[j][q] = 2.0 * (ha[j][q] * std::abs(m[j][q]));
-            eb[j][q] = 2.0 * (hb[j][q] * std::abs(g[j][q]));
-            nw[j][q] =
+            g[j] = dot3(c[j][q], c[3 + j][q], c[6 + j][q], m[0][q], m[1][q], m[2][q]);
+            lanes.ea[j][q] = 2.0 * (ha[j][q] * std::abs(m[j][q]));
+            lanes.eb[j][q] = 2.0 * (hb[j][q] * std::abs(g[j]));
+            lanes.normal[j][q] =
                 dot3(ra[3 * j][q], ra[3 * j + 1][q], ra[3 * j + 2][q], m[0][q], m[1][q], m[2][q]);
+            lanes.corner_a[j][q] = m[j][q] < 0.0 ? ha[j][q] : -ha[j][q];
+            lanes.corner_b[j][q] = g[j] > 0.0 ? hb[j][q] : -hb[j][q];
         }
         const double d_a = -dot3(ha[0][q], ha[1][q], ha[2][q], std::abs(m[0][q]), std::abs(m[1][q]),
                                  std::abs(m[2][q]));
         const double d_b = std::fma(
-            hb[2][q], std::abs(g[2][q]),
-            std::fma(hb[1][q], std::abs(g[1][q]),
-                     std::fma(hb[0][q], std::abs(g[0][q]),
+            hb[2][q], std::abs(g[2]),
+            std::fma(hb[1][q], std::abs(g[1]),
+                     std::fma(hb[0][q], std::abs(g[0]),
                               dot3(m[0][q], m[1][q], m[2][q], t[0][q], t[1][q], t[2][q]))));
-        depth[q] = d_b - d_a;
-    }
-    for (std::size_t q = 0; q < n; ++q) {
-        BoxPairBand& o = out[q];
-        o.normal_a = plane[q].normal;
-        o.normal = Vec3(nw[0][q], nw[1][q], nw[2][q]);
-        o.depth = depth[q];
-        o.touching = !(plane[q].best > 0.0) && o.depth > 0.0;
-        o.na = 0;
-        o.nb = 0;
-        if (!o.touching) {
-            continue;
+        lanes.depth[q] = d_b - d_a;
+        lanes.touching[q] = !(r.top[q] > 0.0) && lanes.depth[q] > 0.0 ? 1 : 0;
+        // The extreme corners in the world: x_a + Ra c_a, x_b + Rb c_b (x_b = x_a + d).
+        const auto& ca = lanes.corner_a;
+        const auto& cb = lanes.corner_b;
+        for (int k = 0; k < 3; ++k) {
+            lanes.point_a[k][q] =
+                lanes.xa[k][q] + dot3(ra[3 * k][q], ra[3 * k + 1][q], ra[3 * k + 2][q], ca[0][q],
+                                      ca[1][q], ca[2][q]);
+            lanes.point_b[k][q] = (lanes.xa[k][q] + lanes.d[k][q]) +
+                                  dot3(rb[3 * k][q], rb[3 * k + 1][q], rb[3 * k + 2][q], cb[0][q],
+                                       cb[1][q], cb[2][q]);
         }
-        const double band = fraction * o.depth;
-        unsigned deep_a = 0;
-        unsigned deep_b = 0;
-        for (unsigned k = 0; k < 3; ++k) {
-            deep_a |= m[k][q] < 0.0 ? 1U << k : 0U;
-            deep_b |= g[k][q] > 0.0 ? 1U << k : 0U;
-        }
-        // The corners turned from the extreme one along the axes of `s`, in the order of s (the
-        // extreme corner, s = 0, first); below < band exactly where the weight is positive.
-        const auto near = [band](const double(&e)[3][w], std::size_t lane, unsigned deep,
-                                 std::array<unsigned char, 8>& corner,
-                                 std::array<double, 8>& weight) {
-            int count = 0;
-            for (unsigned s = 0; s < 8; ++s) {
-                double below = 0.0;
-                for (unsigned k = 0; k < 3; ++k) {
-                    below += (s >> k & 1U) != 0 ? e[k][lane] : 0.0;
-                }
-                if (below < band) {
-                    corner[static_cast<std::size_t>(count)] = static_cast<unsigned char>(deep ^ s);
-                    weight[static_cast<std::size_t>(count)] = 1.0 - below / band;
-                    ++count;
-                }
-            }
-            return count;
-        };
-        o.na = near(ea, q, deep_a, o.corner_a, o.weight_a);
-        o.nb = near(eb, q, deep_b, o.corner_b, o.weight_b);
     }
 }
 

@@ -188,44 +188,42 @@ void box_lane(BoxLanes& lanes, std::size_t q, const PolyhedronFeatures& fa,
 void box_planes(const BoxLanes& lanes, std::size_t n, BoxPlane* out);
 
 /// Pairs of boxes whose faces lie along their bodies' axes (Box::aligned, every shipped box),
-/// posed in the world by rotation matrices, in lanes: the common plane, the depth and the corners
-/// near each body's support plane, from the poses to the end without vertex lists
-/// (box_plane.cpp, box_pair_bands). The route of resting box pairs (dynamics, system_bodies.cpp).
+/// posed in the world by rotation matrices, in lanes: the common plane (box_plane's closed form,
+/// the winner's normal by its rules, picked in the lanes), the depth, the extreme corners and how
+/// far their neighbours lie from each body's support plane, from the poses to the end without
+/// vertex lists and without branches (box_plane.cpp, box_pair_planes). The route of resting box
+/// pairs (dynamics::box_pair_contacts). A corner of a box is given by its body-frame coordinates,
+/// +-half[k] along body axis k.
 struct BoxPairLanes {
     static constexpr std::size_t kWidth = BoxLanes::kWidth;
-    const PolyhedronFeatures* fa[kWidth] = {};
-    const PolyhedronFeatures* fb[kWidth] = {};
+    // Inputs (box_pair_lane).
     alignas(64) double ra[9][kWidth]; ///< A's rotation, body -> world, entry (i, j) at 3 i + j
     alignas(64) double rb[9][kWidth]; ///< B's rotation, body -> world
+    alignas(64) double xa[3][kWidth]; ///< A's centre (m, world frame)
     alignas(64) double d[3][kWidth];  ///< B's centre minus A's (m, world frame)
     alignas(64) double ha[3][kWidth]; ///< A's half extents (m, along A's body axes)
     alignas(64) double hb[3][kWidth]; ///< B's half extents (m)
+    // Outputs (box_pair_planes).
+    alignas(64) int touching[kWidth]; ///< 1 where the closed form finds no separation and depth > 0
+    alignas(64) double depth[kWidth]; ///< distance of the extreme corners along the normal (m)
+    alignas(64) double normal[3][kWidth];   ///< unit normal from B to A, world frame
+    alignas(64) double normal_a[3][kWidth]; ///< the same, A's body frame
+    alignas(64) double corner_a[3][kWidth]; ///< A's corner lowest along the normal (A's frame)
+    alignas(64) double corner_b[3][kWidth]; ///< B's corner highest along the normal (B's frame)
+    alignas(64) double point_a[3][kWidth];  ///< A's lowest corner, world frame (m)
+    alignas(64) double point_b[3][kWidth];  ///< B's highest corner, world frame (m)
+    /// A's neighbour of the lowest corner along body axis k lies ea[k] above it along the normal
+    /// (2 half[k] |m_k|; B's: eb[k] below B's highest); the corners across faces, sums of these.
+    alignas(64) double ea[3][kWidth];
+    alignas(64) double eb[3][kWidth];
 };
-/// Fills lane q for the boxes fa at (xa, ra) and fb at (xb, rb) (body -> world); both aligned.
+/// Fills lane q's inputs for the boxes fa at (xa, ra) and fb at (xb, rb) (body -> world); both
+/// aligned.
 void box_pair_lane(BoxPairLanes& lanes, std::size_t q, const PolyhedronFeatures& fa, const Vec3& xa,
                    const Mat3& ra, const PolyhedronFeatures& fb, const Vec3& xb, const Mat3& rb);
-/// One pair's answer. A corner of a box is a mask of three bits, bit k set for the corner at
-/// +half[k] along body axis k (clear: -half[k]).
-struct BoxPairBand {
-    double depth = 0.0;    ///< distance between the deepest corners along the normal (m)
-    bool touching = false; ///< the closed form finds no separation and depth > 0 (the common
-                           ///< plane's test)
-    Vec3 normal_a = Vec3::UnitX(); ///< unit normal from B to A, A's body frame
-    Vec3 normal = Vec3::UnitX();   ///< the same, world frame
-    /// Touching only: the corners of A lowest along the normal within `fraction` x depth of the
-    /// lowest (B: highest), with the weights 1 - (distance to the extreme) / band, the rule of
-    /// band_vertices; the extreme corner first.
-    int na = 0;
-    int nb = 0;
-    std::array<unsigned char, 8> corner_a{};
-    std::array<unsigned char, 8> corner_b{};
-    std::array<double, 8> weight_a{};
-    std::array<double, 8> weight_b{};
-};
-/// The first n (1 to kWidth) lanes' answers into out[0..n); lanes n and beyond are overwritten
-/// with copies of lane 0 (every lane runs the same code). `fraction` > 0: the band as a fraction
-/// of the depth.
-void box_pair_bands(BoxPairLanes& lanes, std::size_t n, double fraction, BoxPairBand* out);
+/// The outputs of the first n (1 to kWidth) lanes; lanes n and beyond are overwritten with
+/// copies of lane 0 (every lane runs the same code).
+void box_pair_planes(BoxPairLanes& lanes, std::size_t n);
 
 /// The contact point of the patch of a and b for the normal m (unit, from B to A, A's body
 /// frame), world frame: polyhedron_contact's point for a face-on-face contact along m.

@@ -18,7 +18,7 @@ Mat3 rotation_matrix(const Quat& q) {
 }
 
 Vec3 angular_velocity_world(const Quat& q, const Vec3& L_world, const Vec3& inertia_principal) {
-    if (spherical_top(inertia_principal)) { // as the Mat3 form (rotation.hpp)
+    if (spherical_top(inertia_principal)) {               // as the Mat3 form (rotation.hpp)
         return L_world * (3.0 / inertia_principal.sum()); // L / spherical_moment, one division
     }
     const Vec3 l_body = world_to_body(q, L_world);
@@ -120,11 +120,12 @@ template <bool series_only>
 [[gnu::always_inline]] inline void spherical_turn(double& x, double& y, double& z, double& w,
                                                   double l0, double l1, double l2, double k) {
     const double x2 = (l0 * l0 + l1 * l1 + l2 * l2) * (k * k);
-    double sinc = 1.0 + x2 * (-1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 +
-                                                                     x2 * (1.0 / 362880.0))));
-    double c = 1.0 +
-               x2 * (-0.5 + x2 * (1.0 / 24.0 + x2 * (-1.0 / 720.0 +
-                                                     x2 * (1.0 / 40320.0 + x2 * (-1.0 / 3628800.0)))));
+    double sinc =
+        1.0 + x2 * (-1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (1.0 / 362880.0))));
+    double c =
+        1.0 +
+        x2 * (-0.5 + x2 * (1.0 / 24.0 +
+                           x2 * (-1.0 / 720.0 + x2 * (1.0 / 40320.0 + x2 * (-1.0 / 3628800.0)))));
     if constexpr (!series_only) {
         if (x2 > kSeriesLimit * kSeriesLimit) {
             const double a = std::sqrt(x2);

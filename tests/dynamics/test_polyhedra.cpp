@@ -695,8 +695,8 @@ TEST(Polyhedra, BoxLanesAgreeWithElementContact) {
     // bounding radii): the band weights 1 - below / band carry a round-off of the corners'
     // heights, which both routes compute from coordinates of up to R in A's frame (a few
     // roundings: <= 1e-15 R), divided by the band (2 % of the overlap), and move the point by
-    // that times the spread of the near corners (a body's diameter, <= 2 R); forces and histories to
-    // 1e-9 of the step's largest (through the point and the overlap). Far below any error of
+    // that times the spread of the near corners (a body's diameter, <= 2 R); forces and histories
+    // to 1e-9 of the step's largest (through the point and the overlap). Far below any error of
     // geometry (a wrong corner or sign moves the point by the size and the overlap by itself).
     const SceneSpec spec = box_pour();
     System sys(spec);

@@ -195,8 +195,8 @@ TEST(Rotation, FreeRotorHalfPeriodMatchesSymmetricTopLimit) {
 TEST(Rotation, BodiesInVectorLanesTurnAsOneByOne) {
     // free_rotate_bodies (eight bodies per vector batch, series sine) against free_rotate body by
     // body: 13 bodies (a batch and a padded one), a given index order, one body so fast that its
-    // half angle exceeds the series' range and takes the general path, three spherical tops. The two share the same
-    // splitting and series, so they agree to round-off (in practice to the bit).
+    // half angle exceeds the series' range and takes the general path, three spherical tops. The
+    // two share the same splitting and series, so they agree to round-off (in practice to the bit).
     std::mt19937_64 rng(7);
     std::normal_distribution<double> n01(0.0, 1.0);
     const std::size_t n = 13;
