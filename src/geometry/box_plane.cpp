@@ -24,6 +24,9 @@
 
 #include "geometry/polyhedron_contact.hpp"
 
+#include "geometry/convex_polygon.hpp"
+
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -427,6 +430,99 @@ void box_pair_planes(BoxPairLanes& lanes, std::size_t n) {
                                        cb[1][q], cb[2][q]);
         }
     }
+}
+
+bool box_pair_patch(const BoxPairLanes& lanes, std::size_t q, double area_tol, Vec3& point) {
+    const double half = 0.5 * lanes.depth[q];
+    const Vec3 n(lanes.normal[0][q], lanes.normal[1][q], lanes.normal[2][q]);
+    // The section of one box by the mid-plane, in 2D about o = (A's lowest corner) + half n: the
+    // corners across the face of the two axes other than `k` (heights from the extreme corner
+    // sums of e, all within half of it) carried along axis k to the plane. Only when the other
+    // four corners (e_k and beyond) lie past it: then these four edges are the ones the plane
+    // crosses, and the section is this quadrilateral.
+    const Vec3 o = Vec3(lanes.point_a[0][q], lanes.point_a[1][q], lanes.point_a[2][q]) + half * n;
+    const Vec3 u = n.unitOrthogonal();
+    const Vec3 v = n.cross(u);
+    const auto quad = [&](const double(&corner)[3][BoxPairLanes::kWidth],
+                          const double(&rot)[9][BoxPairLanes::kWidth],
+                          const double(&e)[3][BoxPairLanes::kWidth], const Vec3& extreme,
+                          std::array<Vec2, 4>& out) {
+        int k = 0;
+        for (int j = 1; j < 3; ++j) {
+            k = e[j][q] > e[k][q] ? j : k;
+        }
+        const int i = next(k);
+        const int j = prev(k);
+        if (!(e[k][q] > half) || !(e[i][q] + e[j][q] < half)) {
+            return false;
+        }
+        // Turning axis l away from the extreme corner: -2 corner_l along the body's axis l.
+        const auto offset = [&](int l) {
+            const double f = -2.0 * corner[l][q];
+            return Vec3(f * rot[l][q], f * rot[3 + l][q], f * rot[6 + l][q]);
+        };
+        const Vec3 oi = offset(i);
+        const Vec3 oj = offset(j);
+        const Vec3 ok = offset(k);
+        const std::array<double, 4> h = {0.0, e[i][q], e[i][q] + e[j][q], e[j][q]};
+        const std::array<Vec3, 4> c = {extreme, extreme + oi, extreme + oi + oj, extreme + oj};
+        for (std::size_t s = 0; s < 4; ++s) {
+            const Vec3 x = c[s] + ((half - h[s]) / e[k][q]) * ok - o;
+            out[s] = Vec2(u.dot(x), v.dot(x));
+        }
+        if (cross2(out[1] - out[0], out[2] - out[0]) < 0.0) { // counter-clockwise
+            std::swap(out[1], out[3]);
+        }
+        return true;
+    };
+    std::array<Vec2, 4> qa;
+    std::array<Vec2, 4> qb;
+    if (!quad(lanes.corner_a, lanes.ra, lanes.ea,
+              Vec3(lanes.point_a[0][q], lanes.point_a[1][q], lanes.point_a[2][q]), qa) ||
+        !quad(lanes.corner_b, lanes.rb, lanes.eb,
+              Vec3(lanes.point_b[0][q], lanes.point_b[1][q], lanes.point_b[2][q]), qb)) {
+        return false;
+    }
+    // A's quadrilateral clipped by B's (Sutherland-Hodgman, as clip_convex_into): at most eight
+    // corners.
+    std::array<Vec2, 8> poly;
+    std::array<Vec2, 8> next_poly;
+    std::size_t size = 4;
+    std::copy(qa.begin(), qa.end(), poly.begin());
+    for (std::size_t c = 0; c < 4 && size > 0; ++c) {
+        const Vec2& c0 = qb[c];
+        const Vec2 edge = qb[(c + 1) % 4] - c0;
+        std::size_t kept = 0;
+        for (std::size_t k = 0; k < size; ++k) {
+            const Vec2& p = poly[k];
+            const Vec2& r = poly[(k + 1) % size];
+            const double sp = cross2(edge, p - c0);
+            const double sr = cross2(edge, r - c0);
+            if (sp >= 0.0) {
+                next_poly[kept++] = p;
+            }
+            if ((sp >= 0.0) != (sr >= 0.0)) {
+                next_poly[kept++] = p + (r - p) * (sp / (sp - sr));
+            }
+        }
+        size = kept;
+        std::swap(poly, next_poly);
+    }
+    double area2 = 0.0;
+    Vec2 moment = Vec2::Zero();
+    for (std::size_t k = 0; k < size; ++k) {
+        const Vec2& p = poly[k];
+        const Vec2& r = poly[(k + 1) % size];
+        const double w = cross2(p, r);
+        area2 += w;
+        moment += w * (p + r);
+    }
+    if (!(area2 > 2.0 * area_tol)) {
+        return false;
+    }
+    const Vec2 cen = moment / (3.0 * area2);
+    point = o + cen.x() * u + cen.y() * v;
+    return true;
 }
 
 } // namespace kiln::geometry::detail

@@ -224,6 +224,14 @@ void box_pair_lane(BoxPairLanes& lanes, std::size_t q, const PolyhedronFeatures&
 /// The outputs of the first n (1 to kWidth) lanes; lanes n and beyond are overwritten with
 /// copies of lane 0 (every lane runs the same code).
 void box_pair_planes(BoxPairLanes& lanes, std::size_t n);
+/// Lane q of box_pair_planes' outputs, touching face on face: the centroid of the patch (the
+/// section of the two boxes by the plane half way through the depth, as polyhedron_contact's
+/// patch), world frame, into `point`. Where each box's section is the quadrilateral of the four
+/// edges across its face (the other corners past the plane: every resting pair) the two are
+/// clipped here; otherwise, or where the patch's doubled area is not above 2 area_tol (m^2), it
+/// returns false and the general patch code has to answer.
+[[nodiscard]] bool box_pair_patch(const BoxPairLanes& lanes, std::size_t q, double area_tol,
+                                  Vec3& point);
 
 /// The contact point of the patch of a and b for the normal m (unit, from B to A, A's body
 /// frame), world frame: polyhedron_contact's point for a face-on-face contact along m.

@@ -155,11 +155,6 @@ inline double spherical_rate(const Vec3& inertia_principal, double dt) {
 
 } // namespace
 
-bool spherical_top(const Vec3& inertia_principal) {
-    return inertia_principal.maxCoeff() - inertia_principal.minCoeff() <=
-           kSphericalTop * inertia_principal.maxCoeff();
-}
-
 void free_rotate(Quat& q, Mat3& rot, const Vec3& L_world, const Vec3& inertia_principal,
                  double dt) {
     KILN_ASSERT((inertia_principal.array() > 0.0).all());

@@ -84,7 +84,10 @@ inline void kick_angular_momentum(Vec3& L_world, const Vec3& torque_world, doubl
 /// regular polyhedron: moments equal but for the round-off of their computation).
 inline constexpr double kSphericalTop = 1e-12;
 /// Whether the principal moments (kg m^2) are those of a spherical top (kSphericalTop).
-[[nodiscard]] bool spherical_top(const Vec3& inertia_principal);
+[[nodiscard]] inline bool spherical_top(const Vec3& inertia_principal) {
+    return inertia_principal.maxCoeff() - inertia_principal.minCoeff() <=
+           kSphericalTop * inertia_principal.maxCoeff();
+}
 /// The one moment (kg m^2) a spherical top is given: the mean of its three.
 [[nodiscard]] inline double spherical_moment(const Vec3& inertia_principal) {
     return inertia_principal.sum() / 3.0;

@@ -3,16 +3,21 @@
 // against polyhedron_contact, which runs it: the lanes give the same separation, normal, feature
 // and candidate count, bit for bit, lane by lane, for pairs of the shipped boxes (and a box whose
 // axes are not its body frame's) in random, near, stacked and edge-on-edge poses, with the lanes
-// mixing shapes and poses.
+// mixing shapes and poses. The face-on-face patch of the resting pairs' route
+// (detail::box_pair_patch) against polyhedron_contact's patch code.
 
 #include "geometry/polyhedron.hpp"
 #include "geometry/polyhedron_contact.hpp"
 #include "geometry/polyhedron_search.hpp"
+#include "geometry/rotation.hpp"
 #include "io/shape_reader.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
 #include <gtest/gtest.h>
 #include <numbers>
 #include <random>
@@ -186,4 +191,78 @@ TEST(BoxLanes, EveryLaneIsTheScalarClosedForm) {
     EXPECT_GT(features[static_cast<int>(g::CommonPlaneFeature::kEdgeEdge)], 300);
     EXPECT_GT(touching, 1000);
     EXPECT_GT(static_cast<int>(checked) - touching, 1000);
+}
+
+TEST(BoxLanes, FaceOnFacePatchIsThePolyhedronPatch) {
+    // detail::box_pair_patch (the section of each box by the mid-plane as the quadrilateral of
+    // the four edges across its face, the two clipped) against polyhedron_contact's patch code
+    // (detail::patch_point: sections from the vertex and edge lists, hulls, clip), for two boxes
+    // face on face: B under A with any of its faces up, twisted about the normal, shifted
+    // sideways so that the faces overlap partly or wholly, tilted by up to 2e-5 rad (the corners
+    // across a face up to ~1e-7 m apart along the normal: the function takes any tilt that
+    // leaves the other four corners past the plane), pressed by 0.1-1 % of A's size, the pair
+    // then turned and moved anywhere. Both give the patch's
+    // centroid; to round-off of the coordinates (1e-12 of the size; a misplaced corner moves it
+    // by ~1e-4 of the size and more).
+    std::vector<g::PolyhedronFeatures> shapes;
+    for (const std::string name : {"cube", "cuboid_6x6x5", "plate_10x9x2"}) {
+        shapes.push_back(load(name));
+    }
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    std::uniform_int_distribution<int> pick(0, 2);
+    std::uniform_int_distribution<int> axis(0, 5);
+    const auto random_turn = [&] {
+        return Quat(unit(rng), unit(rng), unit(rng), unit(rng)).normalized();
+    };
+    constexpr std::size_t w = g::detail::BoxPairLanes::kWidth;
+    g::detail::BoxPairLanes lanes;
+    int answered = 0;
+    double worst = 0.0;
+    for (int batch = 0; batch < 250; ++batch) {
+        std::array<g::PosedPolyhedron, w> pa;
+        std::array<g::PosedPolyhedron, w> pb;
+        for (std::size_t q = 0; q < w; ++q) {
+            const g::PolyhedronFeatures& fa = shapes[static_cast<std::size_t>(pick(rng))];
+            const g::PolyhedronFeatures& fb = shapes[static_cast<std::size_t>(pick(rng))];
+            // In A's frame: B's face l (sign s) up against A's bottom face.
+            const int up = axis(rng);
+            const int l = up % 3;
+            const double sign = up < 3 ? 1.0 : -1.0;
+            constexpr double quarter = 0.5 * std::numbers::pi;
+            const Quat lay = l == 0   ? about(Vec3::UnitY(), -sign * quarter)
+                             : l == 1 ? about(Vec3::UnitX(), sign * quarter)
+                                      : about(Vec3::UnitX(), sign > 0.0 ? 0.0 : 2.0 * quarter);
+            ASSERT_LE((lay * (sign * Vec3::Unit(l)) - Vec3::UnitZ()).norm(), 1e-15);
+            const Quat twist = about(Vec3::UnitZ(), std::numbers::pi * unit(rng));
+            const Quat tilt = about(Vec3(unit(rng), unit(rng), 0.0), 2e-5 * unit(rng));
+            const Quat qb_rel = tilt * twist * lay;
+            const double size = fa.box->half.minCoeff();
+            const double press = size * (0.001 + 0.009 * (0.5 + 0.5 * unit(rng)));
+            const Vec3 shift(0.8 * fa.box->half.x() * unit(rng), 0.8 * fa.box->half.y() * unit(rng),
+                             -(fa.box->half.z() + fb.box->half[l]) + press);
+            const Quat g0 = random_turn();
+            const Vec3 x0(0.1 * unit(rng), 0.1 * unit(rng), 0.1 * unit(rng));
+            pa[q] = {&fa, x0, g0};
+            pb[q] = {&fb, x0 + g0 * shift, (g0 * qb_rel).normalized()};
+            g::detail::box_pair_lane(lanes, q, fa, pa[q].x, g::unit_rotation_matrix(pa[q].q), fb,
+                                     pb[q].x, g::unit_rotation_matrix(pb[q].q));
+        }
+        g::detail::box_pair_planes(lanes, w);
+        for (std::size_t q = 0; q < w; ++q) {
+            SCOPED_TRACE("batch " + std::to_string(batch) + " lane " + std::to_string(q));
+            ASSERT_EQ(lanes.touching[q], 1);
+            const double scale = pa[q].shape->radius + pb[q].shape->radius;
+            Vec3 point;
+            ASSERT_TRUE(g::detail::box_pair_patch(lanes, q, 1e-24 * scale * scale, point));
+            const Vec3 m(lanes.normal_a[0][q], lanes.normal_a[1][q], lanes.normal_a[2][q]);
+            const Vec3 general = g::detail::patch_point(pa[q], pb[q], m);
+            const double size = pa[q].shape->box->half.minCoeff();
+            worst = std::max(worst, (point - general).norm() / size);
+            EXPECT_LE((point - general).norm(), 1e-12 * size);
+            ++answered;
+        }
+    }
+    EXPECT_EQ(answered, 2000);
+    std::printf("%d face-on-face patches; largest difference %.2g of the size\n", answered, worst);
 }
