@@ -898,12 +898,16 @@ void box_pair_contacts(const BoxPairQuery* pairs, std::size_t n, ElementContact*
             ec.touching = true;
             ec.overlap = lanes.depth[q];
             ec.normal = Vec3(lanes.normal[0][q], lanes.normal[1][q], lanes.normal[2][q]);
-            ec.point =
-                patch[q] != 0
-                    ? geometry::detail::patch_point(
-                          {s.a->poly, s.a->centre, s.a->q}, {s.b->poly, s.b->centre, s.b->q},
-                          Vec3(lanes.normal_a[0][q], lanes.normal_a[1][q], lanes.normal_a[2][q]))
-                    : Vec3(point[0][q], point[1][q], point[2][q]);
+            ec.point = Vec3(point[0][q], point[1][q], point[2][q]);
+            if (patch[q] !=
+                0) { // face on face: the patch's centroid (the general code's tolerance)
+                const double scale = s.a->poly->radius + s.b->poly->radius;
+                if (!geometry::detail::box_pair_patch(lanes, q, 1e-24 * scale * scale, ec.point)) {
+                    ec.point = geometry::detail::patch_point(
+                        {s.a->poly, s.a->centre, s.a->q}, {s.b->poly, s.b->centre, s.b->q},
+                        Vec3(lanes.normal_a[0][q], lanes.normal_a[1][q], lanes.normal_a[2][q]));
+                }
+            }
             ec.r_eff = polyhedron_pair_radius(*s.a, *s.b);
         }
     }
