@@ -214,6 +214,102 @@ struct PlaneRun {
     alignas(64) int flip[kW];
 };
 
+/// The edge candidates of plane_candidates as box_plane runs them: a candidate wins where its
+/// numerator exceeds the running best times its length, and the best becomes the quotient.
+void edges_divided(const double (&c)[9][kW], const double (&t)[3][kW], const double (&ha)[3][kW],
+                   const double (&hb)[3][kW], PlaneRun& r) {
+    for (int i = 0; i < 3; ++i) {
+        const int i1 = next(i);
+        const int i2 = prev(i);
+        for (int j = 0; j < 3; ++j) {
+            const int j1 = next(j);
+            const int j2 = prev(j);
+            const int id = 6 + 3 * i + j;
+            // The division only where a lane's candidate wins (rare in a resting pile, where
+            // face planes win): first the tests, then the quotients if any lane needs one.
+            alignas(64) double num[kW];
+            alignas(64) double len[kW];
+            alignas(64) int g[kW];
+            int wins = 0;
+#pragma omp simd reduction(+ : wins)
+            for (std::size_t q = 0; q < kW; ++q) {
+                edge_candidate(-c[3 * i2 + j][q], c[3 * i1 + j][q], t[i1][q], t[i2][q], ha[i1][q],
+                               ha[i2][q], c[3 * i1 + j1][q], c[3 * i2 + j1][q], c[3 * i1 + j2][q],
+                               c[3 * i2 + j2][q], hb[j1][q], hb[j2][q], num[q], len[q]);
+                const bool valid = !(len[q] <= 1e-12);
+                r.count[q] += valid ? 1 : 0;
+                g[q] = valid && num[q] > r.top[q] * len[q] ? 1 : 0;
+                wins += g[q];
+            }
+            if (wins == 0) {
+                continue;
+            }
+#pragma omp simd
+            for (std::size_t q = 0; q < kW; ++q) {
+                const bool gq = g[q] != 0;
+                r.top[q] = gq ? num[q] / len[q] : r.top[q];
+                r.win[q] = gq ? id : r.win[q];
+                r.w_len[q] = gq ? len[q] : r.w_len[q];
+            }
+        }
+    }
+}
+
+/// The edge candidates with the winner's direction, without a branch: the running best kept as
+/// a fraction top_num / top_len (a face: its separation over 1) and compared cross-multiplied,
+/// num top_len > top_num len (both lengths > 0), so no lane divides until the end. The winner
+/// is box_plane's but in near-ties (the two products round otherwise than one quotient and
+/// one product); its separation and direction are the same quotients.
+void edges_tracked(const double (&c)[9][kW], const double (&t)[3][kW], const double (&ha)[3][kW],
+                   const double (&hb)[3][kW], PlaneRun& r) {
+    alignas(64) double top_len[kW];
+    alignas(64) double raw[3][kW]; // the winner's direction times its length
+#pragma omp simd
+    for (std::size_t q = 0; q < kW; ++q) {
+        top_len[q] = 1.0;
+        for (int k = 0; k < 3; ++k) {
+            raw[k][q] = r.u[k][q];
+        }
+    }
+    for (int i = 0; i < 3; ++i) {
+        const int i1 = next(i);
+        const int i2 = prev(i);
+        for (int j = 0; j < 3; ++j) {
+            const int j1 = next(j);
+            const int j2 = prev(j);
+            const int id = 6 + 3 * i + j;
+#pragma omp simd
+            for (std::size_t q = 0; q < kW; ++q) {
+                const double n1 = -c[3 * i2 + j][q];
+                const double n2 = c[3 * i1 + j][q];
+                double num;
+                double len;
+                edge_candidate(n1, n2, t[i1][q], t[i2][q], ha[i1][q], ha[i2][q], c[3 * i1 + j1][q],
+                               c[3 * i2 + j1][q], c[3 * i1 + j2][q], c[3 * i2 + j2][q], hb[j1][q],
+                               hb[j2][q], num, len);
+                const bool valid = !(len <= 1e-12);
+                r.count[q] += valid ? 1 : 0;
+                const bool g = valid && num * top_len[q] > r.top[q] * len;
+                r.top[q] = g ? num : r.top[q]; // the numerator until the end
+                top_len[q] = g ? len : top_len[q];
+                r.win[q] = g ? id : r.win[q];
+                raw[i][q] = g ? 0.0 : raw[i][q];
+                raw[i1][q] = g ? n1 : raw[i1][q];
+                raw[i2][q] = g ? n2 : raw[i2][q];
+                r.flip[q] = g ? (std::fma(n1, t[i1][q], n2 * t[i2][q]) > 0.0 ? 1 : 0) : r.flip[q];
+            }
+        }
+    }
+#pragma omp simd
+    for (std::size_t q = 0; q < kW; ++q) {
+        r.top[q] = r.top[q] / top_len[q];
+        r.w_len[q] = top_len[q];
+        for (int k = 0; k < 3; ++k) {
+            r.u[k][q] = raw[k][q] / top_len[q];
+        }
+    }
+}
+
 /// box_plane's candidates and comparisons in its order, candidate by candidate across the lanes;
 /// a candidate replaces a lane's running best where the one-pair form's test holds (no branch).
 /// Lanes past the pairs in use hold whatever their inputs are; their results are not read.
@@ -268,49 +364,10 @@ void plane_candidates(const double (&c)[9][kW], const double (&t)[3][kW], const 
             }
         }
     }
-    for (int i = 0; i < 3; ++i) {
-        const int i1 = next(i);
-        const int i2 = prev(i);
-        for (int j = 0; j < 3; ++j) {
-            const int j1 = next(j);
-            const int j2 = prev(j);
-            const int id = 6 + 3 * i + j;
-            // The division only where a lane's candidate wins (rare in a resting pile, where
-            // face planes win): first the tests, then the quotients if any lane needs one.
-            alignas(64) double num[kW];
-            alignas(64) double len[kW];
-            alignas(64) int g[kW];
-            int wins = 0;
-#pragma omp simd reduction(+ : wins)
-            for (std::size_t q = 0; q < kW; ++q) {
-                edge_candidate(-c[3 * i2 + j][q], c[3 * i1 + j][q], t[i1][q], t[i2][q], ha[i1][q],
-                               ha[i2][q], c[3 * i1 + j1][q], c[3 * i2 + j1][q], c[3 * i1 + j2][q],
-                               c[3 * i2 + j2][q], hb[j1][q], hb[j2][q], num[q], len[q]);
-                const bool valid = !(len[q] <= 1e-12);
-                r.count[q] += valid ? 1 : 0;
-                g[q] = valid && num[q] > r.top[q] * len[q] ? 1 : 0;
-                wins += g[q];
-            }
-            if (wins == 0) {
-                continue;
-            }
-#pragma omp simd
-            for (std::size_t q = 0; q < kW; ++q) {
-                const bool gq = g[q] != 0;
-                r.top[q] = gq ? num[q] / len[q] : r.top[q];
-                r.win[q] = gq ? id : r.win[q];
-                r.w_len[q] = gq ? len[q] : r.w_len[q];
-                if constexpr (track) { // e_i x C_j: (n1 along i1, n2 along i2) / len
-                    const double n1 = -c[3 * i2 + j][q];
-                    const double n2 = c[3 * i1 + j][q];
-                    r.u[i][q] = gq ? 0.0 : r.u[i][q];
-                    r.u[i1][q] = gq ? n1 / len[q] : r.u[i1][q];
-                    r.u[i2][q] = gq ? n2 / len[q] : r.u[i2][q];
-                    r.flip[q] =
-                        gq ? (std::fma(n1, t[i1][q], n2 * t[i2][q]) > 0.0 ? 1 : 0) : r.flip[q];
-                }
-            }
-        }
+    if constexpr (!track) {
+        edges_divided(c, t, ha, hb, r);
+    } else {
+        edges_tracked(c, t, ha, hb, r);
     }
 }
 
@@ -485,24 +542,29 @@ bool box_pair_patch(const BoxPairLanes& lanes, std::size_t q, double area_tol, V
     }
     // A's quadrilateral clipped by B's (Sutherland-Hodgman, as clip_convex_into): at most eight
     // corners.
-    std::array<Vec2, 8> poly;
-    std::array<Vec2, 8> next_poly;
+    std::array<Vec2, 8> buffer_0;
+    std::array<Vec2, 8> buffer_1;
+    Vec2* poly = buffer_0.data();
+    Vec2* next_poly = buffer_1.data();
     std::size_t size = 4;
-    std::copy(qa.begin(), qa.end(), poly.begin());
+    std::copy(qa.begin(), qa.end(), poly);
     for (std::size_t c = 0; c < 4 && size > 0; ++c) {
         const Vec2& c0 = qb[c];
         const Vec2 edge = qb[(c + 1) % 4] - c0;
+        std::array<double, 8> side; // > 0: inside, left of the edge
+        for (std::size_t k = 0; k < size; ++k) {
+            side[k] = cross2(edge, poly[k] - c0);
+        }
         std::size_t kept = 0;
         for (std::size_t k = 0; k < size; ++k) {
-            const Vec2& p = poly[k];
-            const Vec2& r = poly[(k + 1) % size];
-            const double sp = cross2(edge, p - c0);
-            const double sr = cross2(edge, r - c0);
+            const std::size_t k1 = k + 1 == size ? 0 : k + 1;
+            const double sp = side[k];
+            const double sr = side[k1];
             if (sp >= 0.0) {
-                next_poly[kept++] = p;
+                next_poly[kept++] = poly[k];
             }
             if ((sp >= 0.0) != (sr >= 0.0)) {
-                next_poly[kept++] = p + (r - p) * (sp / (sp - sr));
+                next_poly[kept++] = poly[k] + (poly[k1] - poly[k]) * (sp / (sp - sr));
             }
         }
         size = kept;
@@ -512,7 +574,7 @@ bool box_pair_patch(const BoxPairLanes& lanes, std::size_t q, double area_tol, V
     Vec2 moment = Vec2::Zero();
     for (std::size_t k = 0; k < size; ++k) {
         const Vec2& p = poly[k];
-        const Vec2& r = poly[(k + 1) % size];
+        const Vec2& r = poly[k + 1 == size ? 0 : k + 1];
         const double w = cross2(p, r);
         area2 += w;
         moment += w * (p + r);
