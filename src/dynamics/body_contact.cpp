@@ -899,8 +899,8 @@ void box_pair_contacts(const BoxPairQuery* pairs, std::size_t n, ElementContact*
             ec.overlap = lanes.depth[q];
             ec.normal = Vec3(lanes.normal[0][q], lanes.normal[1][q], lanes.normal[2][q]);
             ec.point = Vec3(point[0][q], point[1][q], point[2][q]);
-            if (patch[q] !=
-                0) { // face on face: the patch's centroid (the general code's tolerance)
+            // Face on face: the patch's centroid (with the general code's area tolerance).
+            if (patch[q] != 0) {
                 const double scale = s.a->poly->radius + s.b->poly->radius;
                 if (!geometry::detail::box_pair_patch(lanes, q, 1e-24 * scale * scale, ec.point)) {
                     ec.point = geometry::detail::patch_point(
