@@ -203,7 +203,8 @@ constexpr std::size_t kW = BoxLanes::kWidth;
 /// axes (tc) and the number of candidates; with the direction (`track`): the winner's unit
 /// direction u in A's box frame and whether the normal from B to A is -u (flip), by
 /// box_plane_end's rules (a face of A: flip where t_i >= 0; of B: where tc_j > 0; an edge pair:
-/// where n . t > 0).
+/// where n . t > 0). win and w_len are box_plane_end's inputs, read and kept up to date only
+/// without `track` (the tracked route reads top, u and flip).
 struct PlaneRun {
     alignas(64) double top[kW];
     alignas(64) double w_len[kW];
@@ -277,7 +278,6 @@ void edges_tracked(const double (&c)[9][kW], const double (&t)[3][kW], const dou
         for (int j = 0; j < 3; ++j) {
             const int j1 = next(j);
             const int j2 = prev(j);
-            const int id = 6 + 3 * i + j;
 #pragma omp simd
             for (std::size_t q = 0; q < kW; ++q) {
                 const double n1 = -c[3 * i2 + j][q];
@@ -292,7 +292,6 @@ void edges_tracked(const double (&c)[9][kW], const double (&t)[3][kW], const dou
                 const bool g = valid && num * top_len[q] > r.top[q] * len;
                 r.top[q] = g ? num : r.top[q]; // the numerator until the end
                 top_len[q] = g ? len : top_len[q];
-                r.win[q] = g ? id : r.win[q];
                 raw[i][q] = g ? 0.0 : raw[i][q];
                 raw[i1][q] = g ? n1 : raw[i1][q];
                 raw[i2][q] = g ? n2 : raw[i2][q];
@@ -303,7 +302,6 @@ void edges_tracked(const double (&c)[9][kW], const double (&t)[3][kW], const dou
 #pragma omp simd
     for (std::size_t q = 0; q < kW; ++q) {
         r.top[q] = r.top[q] / top_len[q];
-        r.w_len[q] = top_len[q];
         for (int k = 0; k < 3; ++k) {
             r.u[k][q] = raw[k][q] / top_len[q];
         }

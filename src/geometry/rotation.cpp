@@ -44,6 +44,15 @@ constexpr double kSeriesLimit = 0.0625;
 /// half step, the usual case by far) the Taylor series to x^9 and x^10: the first omitted terms,
 /// x^11/11! and x^12/12!, are below 2e-20 relative, far under one unit in the last place; the
 /// library otherwise (never with `series_only`, whose caller has checked the bound).
+/// The series' two polynomials in x2 = x^2: sin(x) / x and cos(x).
+[[gnu::always_inline]] inline void sinc_cos_series(double x2, double& sinc, double& c) {
+    sinc =
+        1.0 + x2 * (-1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (1.0 / 362880.0))));
+    c = 1.0 +
+        x2 * (-0.5 + x2 * (1.0 / 24.0 +
+                           x2 * (-1.0 / 720.0 + x2 * (1.0 / 40320.0 + x2 * (-1.0 / 3628800.0)))));
+}
+
 template <bool series_only>
 [[gnu::always_inline]] inline void sin_cos(double x, double& s, double& c) {
     if constexpr (!series_only) {
@@ -53,12 +62,9 @@ template <bool series_only>
             return;
         }
     }
-    const double x2 = x * x;
-    s = x * (1.0 +
-             x2 * (-1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (1.0 / 362880.0)))));
-    c = 1.0 +
-        x2 * (-0.5 + x2 * (1.0 / 24.0 +
-                           x2 * (-1.0 / 720.0 + x2 * (1.0 / 40320.0 + x2 * (-1.0 / 3628800.0)))));
+    double sinc = 1.0;
+    sinc_cos_series(x * x, sinc, c);
+    s = x * sinc;
 }
 
 /// Exact flow of T_k = L_k^2 / (2 I_k) over h: the body turns by phi = h L_k / I_k about body axis
@@ -120,12 +126,9 @@ template <bool series_only>
 [[gnu::always_inline]] inline void spherical_turn(double& x, double& y, double& z, double& w,
                                                   double l0, double l1, double l2, double k) {
     const double x2 = (l0 * l0 + l1 * l1 + l2 * l2) * (k * k);
-    double sinc =
-        1.0 + x2 * (-1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (1.0 / 362880.0))));
-    double c =
-        1.0 +
-        x2 * (-0.5 + x2 * (1.0 / 24.0 +
-                           x2 * (-1.0 / 720.0 + x2 * (1.0 / 40320.0 + x2 * (-1.0 / 3628800.0)))));
+    double sinc = 1.0;
+    double c = 1.0;
+    sinc_cos_series(x2, sinc, c);
     if constexpr (!series_only) {
         if (x2 > kSeriesLimit * kSeriesLimit) {
             const double a = std::sqrt(x2);
