@@ -385,10 +385,12 @@ class System {
     std::vector<geometry::PlaneMemo> plane_memos_;
     bool plane_memo_ = true;
     // The resting box pairs of one evaluation (body_forces): their queries, the hits they came
-    // from, and their contacts (box_pair_contacts).
+    // from (and per hit its pair), their last step's records and their contacts
+    // (box_pair_contacts).
     bool box_lanes_ = true;
     std::vector<BoxPairQuery> box_queries_;
     std::vector<std::uint32_t> box_hits_;
+    std::vector<std::uint32_t> box_slot_; // per hit: its pair in box_queries_, or none
     std::vector<const BodyContact*> box_old_;
     std::vector<ElementContact> box_found_;
     // Per list entry of two single polyhedra whose cached direction proved them apart: the pose

@@ -1170,6 +1170,26 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 }
                 hand_over(s, s.b, ContactGroup(0, k, 0, 0), p_.material[s.b], pair_totals);
             };
+            // The contact of box pair i (box_pair_contacts, ahead of the serial pass) of entry k,
+            // taken in the serial order as take_single takes single_query's: one narrow-phase
+            // call, the contact to the law.
+            const auto take_box = [&](const MemberPair& m, std::uint32_t i) {
+                ++np_.calls;
+                const ElementContact& ec = box_found_[i];
+                if (!ec.touching) {
+                    return;
+                }
+                const BodyContactKey key{p_.id[m.a], p_.id[m.b], 0, 0};
+                const double ratio =
+                    ec.overlap / ratio_size(*box_queries_[i].a, box_queries_[i].b);
+                const ContactGroup g(0, m.k, 0, 0);
+                if (convex_blocks_) {
+                    queue_convex(m.a, m.b, key, g, ec, box_old_[i], p_.material[m.b], ratio);
+                } else {
+                    apply(m.a, m.b, key, g, ec, box_old_[i], p_.material[m.b], ratio,
+                          pair_totals);
+                }
+            };
             AheadPair one; // the serial pass's single_query
             // The general route of entry k. `lookup(g, eb)`: last step's record (find_old in the
             // serial pass). `plan`: nullptr in the serial route, which runs the narrow phase of
@@ -1544,12 +1564,17 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // threads: their narrow phase eight pairs at a time in vector lanes (use_box_lanes).
             const bool boxes_ahead =
                 box_lanes_ && n_convex > 1 && spec_.narrow_phase == NarrowPhase::newton;
-            if (ahead || boxes_ahead) {
+            if (ahead) {
                 ahead_.resize(n_hits);
                 for (AheadPair& s : ahead_) {
                     s.ready = false;
                     s.planned = false;
                 }
+            }
+            // box_slot_[h]: hit h's pair among the box pairs below, or none (its own route).
+            constexpr std::uint32_t no_box = 0xffffffffU;
+            if (boxes_ahead) {
+                box_slot_.assign(n_hits, no_box);
             }
             if (boxes_ahead) {
                 // The pairs: one polyhedron on each side, both boxes along their body axes,
@@ -1597,6 +1622,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     if (old == nullptr) {
                         continue;
                     }
+                    box_slot_[h] = static_cast<std::uint32_t>(box_queries_.size());
                     box_queries_.push_back({&A, &B, &rot_[m.a], &rot_[m.b]});
                     box_hits_.push_back(static_cast<std::uint32_t>(h));
                     box_old_.push_back(old);
@@ -1617,22 +1643,12 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                                           box_found_.data() + p0);
                     }
                 });
-                for (std::size_t i = 0; i < box_hits_.size(); ++i) {
-                    const std::size_t h = box_hits_[i];
-                    const MemberPair& m = member_pairs_[member_hits_[h]];
-                    AheadPair& s = ahead_[h];
-                    s.counts = {};
-                    s.counts.calls = 1;
-                    s.touching = false;
-                    sep_proofs_[m.k].valid = false;
-                    apart_below_[m.k] = -std::numeric_limits<double>::infinity();
-                    const ElementContact& ec = box_found_[i];
-                    if (ec.touching) {
-                        s.found(m.a, m.b, BodyContactKey{p_.id[m.a], p_.id[m.b], 0, 0}, ec,
-                                box_old_[i],
-                                ec.overlap / ratio_size(*box_queries_[i].a, box_queries_[i].b));
-                    }
-                    s.ready = true;
+                // The cached direction and proof as single_query leaves them after its narrow
+                // phase; the contacts go to the law in the serial pass (take_box).
+                for (const std::uint32_t h : box_hits_) {
+                    const std::uint32_t k = member_pairs_[member_hits_[h]].k;
+                    sep_proofs_[k].valid = false;
+                    apart_below_[k] = -std::numeric_limits<double>::infinity();
                 }
             }
             if (ahead) {
@@ -1641,7 +1657,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 for (std::ptrdiff_t h = 0; h < hits; ++h) {
                     AheadPair& s = ahead_[static_cast<std::size_t>(h)];
                     const MemberPair& m = member_pairs_[member_hits_[static_cast<std::size_t>(h)]];
-                    if (m.ea != no_element || s.ready) {
+                    if (m.ea != no_element || (boxes_ahead && box_slot_[h] != no_box)) {
                         continue;
                     }
                     try {
@@ -1705,7 +1721,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 fetch_memo(h + fetch_ahead / 2, true);
                 const MemberPair& m = member_pairs_[member_hits_[h]];
                 if (m.ea == no_element) {
-                    if ((ahead || boxes_ahead) && ahead_[h].ready) {
+                    if (boxes_ahead && box_slot_[h] != no_box) {
+                        take_box(m, box_slot_[h]);
+                    } else if (ahead && ahead_[h].ready) {
                         take_single(m.k, ahead_[h]);
                     } else if (ahead && ahead_[h].planned) {
                         general_entry(m.k, m.a, m.b, find_old, &ahead_[h].plan, false);

@@ -974,9 +974,19 @@ double polyhedron_overlap_along(const PosedPolyhedron& a, const PosedPolyhedron&
         }
         return std::max(std::max(h0, h1), std::max(h2, h3));
     };
+    // A box's highest corner along d in closed form, sum_k h_k |u_k . d| (u_k its face normals):
+    // the largest of its eight corners' heights in exact arithmetic, so the same number as the
+    // vertex scan to round-off (test PolyhedronOverlapFromHeightsAgreesWithTheSupportForm).
+    const auto height = [&top](const PolyhedronFeatures& f, const Vec3& d) {
+        if (!f.box) {
+            return top(f.vertices, d);
+        }
+        const Vec3 g = f.box->aligned ? d : Vec3(f.box->axes.transpose() * d);
+        return f.box->half.dot(g.cwiseAbs());
+    };
     const Vec3 mb = b.q.conjugate() * m;
     const Vec3 ma = a.q.conjugate() * m;
-    return m.dot(b.x - a.x) + top(b.shape->vertices, mb) + top(a.shape->vertices, -ma);
+    return m.dot(b.x - a.x) + height(*b.shape, mb) + height(*a.shape, -ma);
 }
 
 PolyhedronContact polyhedron_contact(const PosedPolyhedron& a, const PosedPolyhedron& b,
