@@ -1180,14 +1180,12 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     return;
                 }
                 const BodyContactKey key{p_.id[m.a], p_.id[m.b], 0, 0};
-                const double ratio =
-                    ec.overlap / ratio_size(*box_queries_[i].a, box_queries_[i].b);
+                const double ratio = ec.overlap / ratio_size(*box_queries_[i].a, box_queries_[i].b);
                 const ContactGroup g(0, m.k, 0, 0);
                 if (convex_blocks_) {
                     queue_convex(m.a, m.b, key, g, ec, box_old_[i], p_.material[m.b], ratio);
                 } else {
-                    apply(m.a, m.b, key, g, ec, box_old_[i], p_.material[m.b], ratio,
-                          pair_totals);
+                    apply(m.a, m.b, key, g, ec, box_old_[i], p_.material[m.b], ratio, pair_totals);
                 }
             };
             AheadPair one; // the serial pass's single_query
