@@ -21,8 +21,38 @@
 #include <utility>
 
 namespace kiln::geometry {
+namespace {
+/// The vertex on a box's corner that d_body points to, where no other corner comes near along it,
+/// else -1. That corner beats every other by at least min_k 2 h_k |g_k| (g = d along the axes);
+/// where this exceeds what the vertices' distance from the exact corners (up to 1e-12 of the
+/// radius along each axis, box_of) and the scan's round-off could make up, 2 sqrt(3) 1e-12 r |d|
+/// + O(1e-16 r |d|), it is the vertex the scan finds. Not inlined: the callers' code, and so how
+/// GCC contracts their products, stays as it was (test PatchOnDemandGivesTheSameNumbers).
+[[gnu::noinline]] int box_support(const PolyhedronFeatures::Box& box, double radius,
+                                  const Vec3& d_body) {
+    const Vec3 g = box.aligned ? d_body : Vec3(box.axes.transpose() * d_body);
+    const Vec3 lead = 2.0 * box.half.cwiseProduct(g.cwiseAbs());
+    if (!(lead.minCoeff() > 1e-11 * radius * d_body.cwiseAbs().sum())) {
+        return -1;
+    }
+    const int s = (g[0] > 0.0 ? 1 : 0) | (g[1] > 0.0 ? 2 : 0) | (g[2] > 0.0 ? 4 : 0);
+    return box.corner[static_cast<std::size_t>(s)];
+}
+} // namespace
+
+namespace {
+/// The common plane's normal turned to the world (q * m, m in A's frame). One compiled copy for
+/// every place that reports it: inlined, GCC contracts the product's multiply-adds per call site,
+/// and the patch's normal and the plane's own (PatchOnDemandGivesTheSameNumbers) parted by an ulp
+/// when the code around them changed.
+[[gnu::noinline]] Vec3 world_normal(const Quat& q, const Vec3& m) {
+    return q * m;
+}
+} // namespace
+
 Vec3 PolyhedronFeatures::support(const Vec3& d_body) const {
-    return farthest_vertex(vertices, d_body);
+    const int v = box ? box_support(*box, radius, d_body) : -1;
+    return v >= 0 ? vertices[static_cast<std::size_t>(v)] : farthest_vertex(vertices, d_body);
 }
 
 namespace {
@@ -128,6 +158,26 @@ std::optional<PolyhedronFeatures::Box> box_of(const PolyhedronFeatures& f) {
     return corners(id) ? id : b;
 }
 
+/// box_of with Box::corner filled in, or none where two vertices share a corner.
+std::optional<PolyhedronFeatures::Box> box_with_corners(const PolyhedronFeatures& f) {
+    std::optional<PolyhedronFeatures::Box> b = box_of(f);
+    if (!b) {
+        return b;
+    }
+    std::array<bool, 8> seen{};
+    for (std::size_t i = 0; i < f.vertices.size(); ++i) {
+        const Vec3 g = b->axes.transpose() * f.vertices[i];
+        const auto s = static_cast<std::size_t>((g[0] > 0.0 ? 1 : 0) | (g[1] > 0.0 ? 2 : 0) |
+                                                (g[2] > 0.0 ? 4 : 0));
+        if (seen[s]) {
+            return std::nullopt;
+        }
+        seen[s] = true;
+        b->corner[s] = static_cast<int>(i);
+    }
+    return b;
+}
+
 } // namespace
 
 void band_vertices(const PosedPolyhedron& p, const double* h, double top, double sign, double band,
@@ -216,7 +266,7 @@ PolyhedronFeatures polyhedron_features(const ConvexPolyhedron& p) {
             f.edges.push_back({e[0], e[1], g0, g1});
         }
     }
-    f.box = box_of(f);
+    f.box = box_with_corners(f);
     return f;
 }
 
@@ -540,7 +590,7 @@ PolyhedronContact patch_in_a(const PosedPolyhedron& a, const PosedPolyhedron& b,
         point_a =
             0.5 * (fa.support(-m) + (r.rot * b.shape->support(r.rot.transpose() * m) + r.shift));
     }
-    c.normal = a.q * m;
+    c.normal = world_normal(a.q, m);
     c.point = a.x + a.q * point_a;
     if (point_only) {
         return c;
@@ -907,13 +957,13 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
     }
     if (best > 0.0) {
         c.depth = -best;
-        c.normal = a.q * best_m;
+        c.normal = world_normal(a.q, best_m);
         return c;
     }
     if (!with_patch) {
         c.touching = true;
         c.depth = -best;
-        c.normal = a.q * best_m;
+        c.normal = world_normal(a.q, best_m);
         c.point = 0.5 * (a.support(-c.normal) + b.support(c.normal));
         return c;
     }
@@ -935,7 +985,7 @@ PolyhedronContact common_plane(const PosedPolyhedron& a, const PosedPolyhedron& 
         if (near != nullptr && c.touching) {
             near_band(a, b, pd, ha.data(), hb.data(), *near);
         }
-        c.normal = a.q * best_m;
+        c.normal = world_normal(a.q, best_m);
         // The deepest vertices of the loops above (A's frame; B's already turned into it), not
         // two more support searches.
         c.point = a.x + a.q * (0.5 * (fa.vertices[pd.deepest_a] + r.vb[pd.deepest_b]));

@@ -63,12 +63,17 @@ struct PolyhedronFeatures {
         /// then exactly the identity (column k along e_k, plus[k] the face along +e_k), and B's
         /// pose needs no turning into the box frames.
         bool aligned = false;
+        /// The vertex on each corner: corner[s] for the corner on the + side of axes.col(k)
+        /// where bit k of s is set.
+        std::array<int, 8> corner{};
     };
     /// Set by polyhedron_features when the polyhedron is a box to 1e-12 of its radius (face
     /// normals opposite and orthogonal, every vertex on a corner); empty for other shapes.
     std::optional<Box> box;
 
-    /// Support point (m, body frame): the vertex maximising d . x for a body-frame direction d.
+    /// Support point (m, body frame): the vertex maximising d . x for a body-frame direction d
+    /// (the first in the list where several do, to round-off). A box picks its corner from the
+    /// signs of d along its axes where no other corner comes near (the same vertex).
     [[nodiscard]] Vec3 support(const Vec3& d_body) const;
 };
 

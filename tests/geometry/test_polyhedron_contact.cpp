@@ -978,6 +978,41 @@ TEST(PolyhedronContact, MemoryWithAShortListChangesNoBit) {
     EXPECT_GT(run.n.unlisted, 100);
 }
 
+TEST(SeparatingAxis, BoxSupportIsTheScansVertex) {
+    // A box's support from the signs of the direction along its axes: the vertex the scan of
+    // every vertex (farthest_vertex) returns, for random directions and for directions near a
+    // face or an edge (components of 0, 1e-15 and 1e-9), where the closed form hands over to
+    // the scan. Boxes in the principal frame (axes turned) and in the file's (aligned).
+    std::mt19937_64 rng(43);
+    std::normal_distribution<double> nd;
+    std::uniform_int_distribution<int> pick(0, 3);
+    const std::array<double, 4> small = {0.0, 1e-15, 1e-9, 1.0};
+    for (const std::string name : {"cube", "plate_10x9x2", "cuboid_6x6x5"}) {
+        for (const bool aligned : {false, true}) {
+            SCOPED_TRACE(name + (aligned ? " aligned" : " principal"));
+            const g::PolyhedronFeatures f = aligned ? load_aligned(name) : load(name);
+            ASSERT_TRUE(f.box.has_value());
+            int closed = 0; // directions the closed form answered (not near a face or an edge)
+            for (int n = 0; n < 4000; ++n) {
+                Vec3 g(nd(rng), nd(rng), nd(rng));
+                if (n % 2 == 1) { // near a face or an edge: scale components along the axes
+                    for (int k = 0; k < 3; ++k) {
+                        g[k] *= small[static_cast<std::size_t>(pick(rng))];
+                    }
+                    if (g.isZero()) {
+                        continue;
+                    }
+                }
+                const Vec3 d = f.box->axes * g;
+                EXPECT_EQ(f.support(d), g::farthest_vertex(f.vertices, d)) << n;
+                const Vec3 lead = 2.0 * f.box->half.cwiseProduct(g.cwiseAbs());
+                closed += lead.minCoeff() > 1e-9 * f.radius * d.norm() ? 1 : 0;
+            }
+            EXPECT_GT(closed, 1900);
+        }
+    }
+}
+
 TEST(SeparatingAxis, PolyhedronOverlapFromHeightsAgreesWithTheSupportForm) {
     // polyhedron_overlap_along (heights in the body frames) against overlap_along (support points
     // turned to the world) over near-contact poses and random directions: the same number to
