@@ -198,21 +198,15 @@ namespace {
 
 constexpr std::size_t kW = BoxLanes::kWidth;
 
-/// The running winner of the closed form in lanes: the largest separation (top), the candidate
-/// (win, as box_plane_end reads it), the winning edge direction's length, B's centre along B's
-/// axes (tc) and the number of candidates; with the direction (`track`): the winner's unit
-/// direction u in A's box frame and whether the normal from B to A is -u (flip), by
-/// box_plane_end's rules (a face of A: flip where t_i >= 0; of B: where tc_j > 0; an edge pair:
-/// where n . t > 0). win and w_len are box_plane_end's inputs, read and kept up to date only
-/// without `track` (the tracked route reads top, u and flip).
+/// The running winner of the closed form in lanes (box_planes): the largest separation (top), the
+/// candidate (win, as box_plane_end reads it), the winning edge direction's length, B's centre
+/// along B's axes (tc) and the number of candidates.
 struct PlaneRun {
     alignas(64) double top[kW];
     alignas(64) double w_len[kW];
     alignas(64) double tc[3][kW];
     alignas(64) int win[kW];
     alignas(64) int count[kW];
-    alignas(64) double u[3][kW];
-    alignas(64) int flip[kW];
 };
 
 /// The edge candidates of plane_candidates as box_plane runs them: a candidate wins where its
@@ -256,62 +250,9 @@ void edges_divided(const double (&c)[9][kW], const double (&t)[3][kW], const dou
     }
 }
 
-/// The edge candidates with the winner's direction, without a branch: the running best kept as
-/// a fraction top_num / top_len (a face: its separation over 1) and compared cross-multiplied,
-/// num top_len > top_num len (both lengths > 0), so no lane divides until the end. The winner
-/// is box_plane's but in near-ties (the two products round otherwise than one quotient and
-/// one product); its separation and direction are the same quotients.
-void edges_tracked(const double (&c)[9][kW], const double (&t)[3][kW], const double (&ha)[3][kW],
-                   const double (&hb)[3][kW], PlaneRun& r) {
-    alignas(64) double top_len[kW];
-    alignas(64) double raw[3][kW]; // the winner's direction times its length
-#pragma omp simd
-    for (std::size_t q = 0; q < kW; ++q) {
-        top_len[q] = 1.0;
-        for (int k = 0; k < 3; ++k) {
-            raw[k][q] = r.u[k][q];
-        }
-    }
-    for (int i = 0; i < 3; ++i) {
-        const int i1 = next(i);
-        const int i2 = prev(i);
-        for (int j = 0; j < 3; ++j) {
-            const int j1 = next(j);
-            const int j2 = prev(j);
-#pragma omp simd
-            for (std::size_t q = 0; q < kW; ++q) {
-                const double n1 = -c[3 * i2 + j][q];
-                const double n2 = c[3 * i1 + j][q];
-                double num;
-                double len;
-                edge_candidate(n1, n2, t[i1][q], t[i2][q], ha[i1][q], ha[i2][q], c[3 * i1 + j1][q],
-                               c[3 * i2 + j1][q], c[3 * i1 + j2][q], c[3 * i2 + j2][q], hb[j1][q],
-                               hb[j2][q], num, len);
-                const bool valid = !(len <= 1e-12);
-                r.count[q] += valid ? 1 : 0;
-                const bool g = valid && num * top_len[q] > r.top[q] * len;
-                r.top[q] = g ? num : r.top[q]; // the numerator until the end
-                top_len[q] = g ? len : top_len[q];
-                raw[i][q] = g ? 0.0 : raw[i][q];
-                raw[i1][q] = g ? n1 : raw[i1][q];
-                raw[i2][q] = g ? n2 : raw[i2][q];
-                r.flip[q] = g ? (std::fma(n1, t[i1][q], n2 * t[i2][q]) > 0.0 ? 1 : 0) : r.flip[q];
-            }
-        }
-    }
-#pragma omp simd
-    for (std::size_t q = 0; q < kW; ++q) {
-        r.top[q] = r.top[q] / top_len[q];
-        for (int k = 0; k < 3; ++k) {
-            r.u[k][q] = raw[k][q] / top_len[q];
-        }
-    }
-}
-
 /// box_plane's candidates and comparisons in its order, candidate by candidate across the lanes;
 /// a candidate replaces a lane's running best where the one-pair form's test holds (no branch).
 /// Lanes past the pairs in use hold whatever their inputs are; their results are not read.
-template <bool track>
 void plane_candidates(const double (&c)[9][kW], const double (&t)[3][kW], const double (&ha)[3][kW],
                       const double (&hb)[3][kW], PlaneRun& r) {
 #pragma omp simd
@@ -320,12 +261,6 @@ void plane_candidates(const double (&c)[9][kW], const double (&t)[3][kW], const 
         r.win[q] = -1;
         r.w_len[q] = 1.0;
         r.count[q] = 6;
-        if constexpr (track) {
-            r.u[0][q] = 1.0;
-            r.u[1][q] = 0.0;
-            r.u[2][q] = 0.0;
-            r.flip[q] = 0;
-        }
     }
     for (int i = 0; i < 3; ++i) {
 #pragma omp simd
@@ -336,12 +271,6 @@ void plane_candidates(const double (&c)[9][kW], const double (&t)[3][kW], const 
             const bool g = sep > r.top[q];
             r.top[q] = g ? sep : r.top[q];
             r.win[q] = g ? i : r.win[q];
-            if constexpr (track) { // e_i
-                for (int k = 0; k < 3; ++k) {
-                    r.u[k][q] = g ? (k == i ? 1.0 : 0.0) : r.u[k][q];
-                }
-                r.flip[q] = g ? (t[i][q] >= 0.0 ? 1 : 0) : r.flip[q];
-            }
         }
     }
     for (int j = 0; j < 3; ++j) {
@@ -354,26 +283,16 @@ void plane_candidates(const double (&c)[9][kW], const double (&t)[3][kW], const 
             const bool g = sep > r.top[q];
             r.top[q] = g ? sep : r.top[q];
             r.win[q] = g ? 3 + j : r.win[q];
-            if constexpr (track) { // B's axis j: column j of C
-                for (int k = 0; k < 3; ++k) {
-                    r.u[k][q] = g ? c[3 * k + j][q] : r.u[k][q];
-                }
-                r.flip[q] = g ? (r.tc[j][q] > 0.0 ? 1 : 0) : r.flip[q];
-            }
         }
     }
-    if constexpr (!track) {
-        edges_divided(c, t, ha, hb, r);
-    } else {
-        edges_tracked(c, t, ha, hb, r);
-    }
+    edges_divided(c, t, ha, hb, r);
 }
 
 } // namespace
 
 void box_planes(const BoxLanes& lanes, std::size_t n, BoxPlane* out) {
     PlaneRun r;
-    plane_candidates<false>(lanes.c, lanes.t, lanes.ha, lanes.hb, r);
+    plane_candidates(lanes.c, lanes.t, lanes.ha, lanes.hb, r);
     const auto& c = lanes.c;
     const auto& t = lanes.t;
     for (std::size_t q = 0; q < n; ++q) {
@@ -424,58 +343,126 @@ void box_pair_planes(BoxPairLanes& lanes, std::size_t n) {
     const auto& rb = lanes.rb;
     const auto& ha = lanes.ha;
     const auto& hb = lanes.hb;
-    // The relative pose in A's frame (for aligned boxes A's box frame): C = Ra^T Rb, B's axes,
-    // and t = Ra^T (x_b - x_a), B's centre.
-    alignas(64) double c[9][w];
-    alignas(64) double t[3][w];
-    for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) {
-#pragma omp simd
-            for (std::size_t q = 0; q < w; ++q) {
-                c[3 * i + j][q] = dot3(ra[i][q], ra[3 + i][q], ra[6 + i][q], rb[j][q], rb[3 + j][q],
-                                       rb[6 + j][q]);
-            }
-        }
-#pragma omp simd
-        for (std::size_t q = 0; q < w; ++q) {
-            t[i][q] = dot3(ra[i][q], ra[3 + i][q], ra[6 + i][q], lanes.d[0][q], lanes.d[1][q],
-                           lanes.d[2][q]);
-        }
-    }
-    PlaneRun r;
-    plane_candidates<true>(c, t, ha, hb, r);
-    // Along the normal m (A's frame): A's corner s h (s_k = +-1) is at height sum_k s_k h_k m_k,
-    // lowest where s_k = -sign(m_k), at d_a = -sum_k h_k |m_k|; B's corner t + C (s h) at
-    // m . t + sum_j s_j h_j g_j with g = C^T m, highest at d_b = m . t + sum_j h_j |g_j|. Turning
-    // axis k away from the extreme corner moves a corner by e_k = 2 h_k |m_k| (B: 2 h_j |g_j|).
-    auto& m = lanes.normal_a;
+    // One pass over the lanes with every candidate unrolled in it, so that each lane's running
+    // winner stays in registers (candidate by candidate across the lanes, as box_planes runs, it
+    // went through memory at every candidate: -9 % of a cube step, docs/performance.md "Session
+    // 31"). The inner loops are unrolled (GCC unroll) before the vectoriser sees the lane loop,
+    // which it takes only without loops inside. The faces as box_plane rates them, in its order
+    // and with its fused products; the edge pairs keep the running best as a fraction
+    // top / top_len (a face: its separation over 1) compared cross-multiplied,
+    // num top_len > top len (both lengths > 0), so no lane divides until the end: the winner is
+    // box_plane's but in near-ties (two products round otherwise than one quotient and one
+    // product); its separation and direction are the same quotients.
 #pragma omp simd
     for (std::size_t q = 0; q < w; ++q) {
-        double g[3];
-        for (int k = 0; k < 3; ++k) {
-            m[k][q] = r.flip[q] != 0 ? -r.u[k][q] : r.u[k][q];
+        // The relative pose in A's frame (for aligned boxes A's box frame): C = Ra^T Rb, B's
+        // axes, and t = Ra^T (x_b - x_a), B's centre.
+        double c[9];
+        double t[3];
+#pragma GCC unroll 3
+        for (int i = 0; i < 3; ++i) {
+#pragma GCC unroll 3
+            for (int j = 0; j < 3; ++j) {
+                c[3 * i + j] = dot3(ra[i][q], ra[3 + i][q], ra[6 + i][q], rb[j][q], rb[3 + j][q],
+                                    rb[6 + j][q]);
+            }
+            t[i] = dot3(ra[i][q], ra[3 + i][q], ra[6 + i][q], lanes.d[0][q], lanes.d[1][q],
+                        lanes.d[2][q]);
         }
+        // The faces of A, then of B: the winner's unit direction u (A's frame) and whether the
+        // normal from B to A is -u (flip), by box_plane_end's rules.
+        double top = -std::numeric_limits<double>::infinity();
+        double u[3] = {1.0, 0.0, 0.0};
+        int flip = 0;
+#pragma GCC unroll 3
+        for (int i = 0; i < 3; ++i) {
+            const double sep =
+                face_separation(t[i], ha[i][q], std::abs(c[3 * i]), std::abs(c[3 * i + 1]),
+                                std::abs(c[3 * i + 2]), hb[0][q], hb[1][q], hb[2][q]);
+            const bool g = sep > top;
+            top = g ? sep : top;
+#pragma GCC unroll 3
+            for (int k = 0; k < 3; ++k) { // e_i
+                u[k] = g ? (k == i ? 1.0 : 0.0) : u[k];
+            }
+            flip = g ? (t[i] >= 0.0 ? 1 : 0) : flip;
+        }
+#pragma GCC unroll 3
         for (int j = 0; j < 3; ++j) {
-            g[j] = dot3(c[j][q], c[3 + j][q], c[6 + j][q], m[0][q], m[1][q], m[2][q]);
-            lanes.ea[j][q] = 2.0 * (ha[j][q] * std::abs(m[j][q]));
+            const double tc = dot3(c[j], c[3 + j], c[6 + j], t[0], t[1], t[2]);
+            const double sep = face_separation(tc, hb[j][q], std::abs(c[j]), std::abs(c[3 + j]),
+                                               std::abs(c[6 + j]), ha[0][q], ha[1][q], ha[2][q]);
+            const bool g = sep > top;
+            top = g ? sep : top;
+#pragma GCC unroll 3
+            for (int k = 0; k < 3; ++k) { // B's axis j: column j of C
+                u[k] = g ? c[3 * k + j] : u[k];
+            }
+            flip = g ? (tc > 0.0 ? 1 : 0) : flip;
+        }
+        // The edge pairs (raw: the winner's direction times its length).
+        double top_len = 1.0;
+        double raw[3] = {u[0], u[1], u[2]};
+#pragma GCC unroll 3
+        for (int i = 0; i < 3; ++i) {
+            const int i1 = next(i);
+            const int i2 = prev(i);
+#pragma GCC unroll 3
+            for (int j = 0; j < 3; ++j) {
+                const int j1 = next(j);
+                const int j2 = prev(j);
+                const double n1 = -c[3 * i2 + j];
+                const double n2 = c[3 * i1 + j];
+                double num;
+                double len;
+                edge_candidate(n1, n2, t[i1], t[i2], ha[i1][q], ha[i2][q], c[3 * i1 + j1],
+                               c[3 * i2 + j1], c[3 * i1 + j2], c[3 * i2 + j2], hb[j1][q], hb[j2][q],
+                               num, len);
+                const bool g = !(len <= 1e-12) && num * top_len > top * len;
+                top = g ? num : top;
+                top_len = g ? len : top_len;
+                raw[i] = g ? 0.0 : raw[i];
+                raw[i1] = g ? n1 : raw[i1];
+                raw[i2] = g ? n2 : raw[i2];
+                flip = g ? (std::fma(n1, t[i1], n2 * t[i2]) > 0.0 ? 1 : 0) : flip;
+            }
+        }
+        top = top / top_len;
+        // Along the normal m (A's frame): A's corner s h (s_k = +-1) is at height
+        // sum_k s_k h_k m_k, lowest where s_k = -sign(m_k), at d_a = -sum_k h_k |m_k|; B's corner
+        // t + C (s h) at m . t + sum_j s_j h_j g_j with g = C^T m, highest at
+        // d_b = m . t + sum_j h_j |g_j|. Turning axis k away from the extreme corner moves a
+        // corner by e_k = 2 h_k |m_k| (B: 2 h_j |g_j|).
+        double m[3];
+#pragma GCC unroll 3
+        for (int k = 0; k < 3; ++k) {
+            const double uk = raw[k] / top_len;
+            m[k] = flip != 0 ? -uk : uk;
+            lanes.normal_a[k][q] = m[k];
+        }
+        double g[3];
+#pragma GCC unroll 3
+        for (int j = 0; j < 3; ++j) {
+            g[j] = dot3(c[j], c[3 + j], c[6 + j], m[0], m[1], m[2]);
+            lanes.ea[j][q] = 2.0 * (ha[j][q] * std::abs(m[j]));
             lanes.eb[j][q] = 2.0 * (hb[j][q] * std::abs(g[j]));
             lanes.normal[j][q] =
-                dot3(ra[3 * j][q], ra[3 * j + 1][q], ra[3 * j + 2][q], m[0][q], m[1][q], m[2][q]);
-            lanes.corner_a[j][q] = m[j][q] < 0.0 ? ha[j][q] : -ha[j][q];
+                dot3(ra[3 * j][q], ra[3 * j + 1][q], ra[3 * j + 2][q], m[0], m[1], m[2]);
+            lanes.corner_a[j][q] = m[j] < 0.0 ? ha[j][q] : -ha[j][q];
             lanes.corner_b[j][q] = g[j] > 0.0 ? hb[j][q] : -hb[j][q];
         }
-        const double d_a = -dot3(ha[0][q], ha[1][q], ha[2][q], std::abs(m[0][q]), std::abs(m[1][q]),
-                                 std::abs(m[2][q]));
+        const double d_a =
+            -dot3(ha[0][q], ha[1][q], ha[2][q], std::abs(m[0]), std::abs(m[1]), std::abs(m[2]));
         const double d_b = std::fma(
             hb[2][q], std::abs(g[2]),
             std::fma(hb[1][q], std::abs(g[1]),
-                     std::fma(hb[0][q], std::abs(g[0]),
-                              dot3(m[0][q], m[1][q], m[2][q], t[0][q], t[1][q], t[2][q]))));
+                     std::fma(hb[0][q], std::abs(g[0]), dot3(m[0], m[1], m[2], t[0], t[1], t[2]))));
         lanes.depth[q] = d_b - d_a;
-        lanes.touching[q] = !(r.top[q] > 0.0) && lanes.depth[q] > 0.0 ? 1 : 0;
+        lanes.touching[q] = !(top > 0.0) && lanes.depth[q] > 0.0 ? 1 : 0;
         // The extreme corners in the world: x_a + Ra c_a, x_b + Rb c_b (x_b = x_a + d).
         const auto& ca = lanes.corner_a;
         const auto& cb = lanes.corner_b;
+#pragma GCC unroll 3
         for (int k = 0; k < 3; ++k) {
             lanes.point_a[k][q] =
                 lanes.xa[k][q] + dot3(ra[3 * k][q], ra[3 * k + 1][q], ra[3 * k + 2][q], ca[0][q],
