@@ -421,6 +421,8 @@ class System {
     std::vector<Quat> travel_q_;
     std::vector<double> apart_below_;
     std::vector<std::uint32_t> skipped_; // this step's skipped near misses (scratch)
+    // Per shape: the hull of a polyhedron posed in place by body_forces, or nullptr (scratch).
+    std::vector<const geometry::ConvexPolyhedron*> pose_hulls_;
     // Per body-wall candidate (body_walls_): for a single polyhedron apart from a plane wall, the
     // travel_ of the body below which its deepest vertex stays above the wall by more than the
     // margin (m; -infinity: none); body_forces then skips the query, whose answer is "apart" and

@@ -537,9 +537,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
         return record_from(cursor, g, eb);
     };
     const double dt = spec_.time_step;
-    const auto tmpl = [&](std::uint32_t i) -> const geometry::ShapeTemplate* {
-        return p_.shape[i] >= 0 ? &spec_.shapes[static_cast<std::size_t>(p_.shape[i])] : nullptr;
-    };
     const auto is_convex = [](const Element& e) { return e.kind != Element::Kind::sphere; };
     const bool first_touch = spec_.body_radius == BodyRadius::first_touch;
     // Does a contact keep the R* of its first step (first_touch, and it has one)? Then the
@@ -570,6 +567,16 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
     if (elements_.size() < n_elements) {
         elements_.resize(n_elements);
     }
+    // Per shape: the hull of a polyhedron with its features (posed below in place, as
+    // append_elements would pose it), else nullptr (every other shape takes append_elements or,
+    // a clump, pose_members). Looked up once per step, not through the template per particle.
+    pose_hulls_.assign(spec_.shapes.size(), nullptr);
+    for (std::size_t s = 0; s < spec_.shapes.size(); ++s) {
+        const auto* hull = std::get_if<geometry::ConvexPolyhedron>(&spec_.shapes[s].shape);
+        if (hull != nullptr && s < poly_features_.size() && !poly_features_[s].edges.empty()) {
+            pose_hulls_[s] = hull;
+        }
+    }
     std::size_t n_convex = 0;        // particles of one convex element (polyhedron, superquadric)
     bool unexpected = false;         // a particle that is not a clump posed as several elements
     std::exception_ptr posing_error; // the first exception of the posing, if any
@@ -580,11 +587,26 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             const auto i = static_cast<std::size_t>(pi);
             const std::size_t e0 = element_begin_[i];
             MemberSphere* out = member_c_.data() + e0;
-            const geometry::ShapeTemplate* t = tmpl(static_cast<std::uint32_t>(i));
-            if (t == nullptr) { // a sphere
+            const int shape = p_.shape[i];
+            if (shape < 0) { // a sphere
                 *out = {p_.x[i].x(), p_.x[i].y(), p_.x[i].z(), p_.radius[i]};
                 continue;
             }
+            const auto si = static_cast<std::size_t>(shape);
+            if (const geometry::ConvexPolyhedron* hull = pose_hulls_[si]; hull != nullptr) {
+                // A polyhedron, as append_elements poses it.
+                const geometry::PolyhedronFeatures& f = poly_features_[si];
+                Element& E = elements_[e0];
+                E = Element{Element::Kind::polyhedron, p_.x[i], p_.radius[i], nullptr, p_.q[i],
+                            f.inradius};
+                E.poly = &f;
+                E.hull = hull;
+                E.r_equiv = f.r_equiv;
+                *out = {p_.x[i].x(), p_.x[i].y(), p_.x[i].z(), 0.0};
+                ++n_convex;
+                continue;
+            }
+            const geometry::ShapeTemplate* t = &spec_.shapes[si];
             if (std::holds_alternative<geometry::Clump>(t->shape)) { // as append_elements
                 static_assert(sizeof(MemberSphere) == 4 * sizeof(double), "x, y, z, r packed");
                 pose_members(p_.x[i], rot_[i],
