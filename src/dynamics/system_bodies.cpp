@@ -597,8 +597,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 // A polyhedron, as append_elements poses it.
                 const geometry::PolyhedronFeatures& f = poly_features_[si];
                 Element& E = elements_[e0];
-                E = Element{Element::Kind::polyhedron, p_.x[i], p_.radius[i], nullptr, p_.q[i],
-                            f.inradius};
+                E = Element{
+                    Element::Kind::polyhedron, p_.x[i], p_.radius[i], nullptr, p_.q[i], f.inradius};
                 E.poly = &f;
                 E.hull = hull;
                 E.r_equiv = f.r_equiv;
