@@ -409,7 +409,7 @@ class System {
     std::vector<SeparationProof> sep_proofs_;
     // Near misses skipped for several steps (body_forces): travel_[i] bounds how far any point of
     // polyhedron body i has moved since the last list build (m; the centre's step plus the
-    // bounding radius times the change of the rotation, |R - R0| <= 2 min |q -+ q0|, in 1-norms,
+    // bounding radius times the change of the rotation, |R - R0| <= 2 min |q -+ q0|, in 2-norms,
     // summed step by step and rounded upwards), brought up to the pose (travel_x_, travel_q_) at
     // every posing. apart_below_[k]: when entry k's proof holds, the overlap along its direction
     // stays below minus twice the margin while travel_[a] + travel_[b] stays below this (m;

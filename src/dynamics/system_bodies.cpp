@@ -654,10 +654,11 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
     if (travel_.size() == p_.size()) {
         for (const std::uint32_t i : bodies_) {
             const Vec3 dx = p_.x[i] - travel_x_[i];
-            const double minus = (p_.q[i].coeffs() - travel_q_[i].coeffs()).lpNorm<1>();
-            const double plus = (p_.q[i].coeffs() + travel_q_[i].coeffs()).lpNorm<1>();
+            const double minus = (p_.q[i].coeffs() - travel_q_[i].coeffs()).squaredNorm();
+            const double plus = (p_.q[i].coeffs() + travel_q_[i].coeffs()).squaredNorm();
             const double step =
-                (dx.lpNorm<1>() + 2.0 * travel_r_[i] * std::min(minus, plus)) * (1.0 + 1e-9);
+                (dx.norm() + 2.0 * travel_r_[i] * std::sqrt(std::min(minus, plus))) *
+                (1.0 + 1e-9);
             travel_[i] = (travel_[i] + step) * (1.0 + 1e-15); // >= the exact sum
             travel_x_[i] = p_.x[i];
             travel_q_[i] = p_.q[i];
