@@ -657,8 +657,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             const double minus = (p_.q[i].coeffs() - travel_q_[i].coeffs()).squaredNorm();
             const double plus = (p_.q[i].coeffs() + travel_q_[i].coeffs()).squaredNorm();
             const double step =
-                (dx.norm() + 2.0 * travel_r_[i] * std::sqrt(std::min(minus, plus))) *
-                (1.0 + 1e-9);
+                (dx.norm() + 2.0 * travel_r_[i] * std::sqrt(std::min(minus, plus))) * (1.0 + 1e-9);
             travel_[i] = (travel_[i] + step) * (1.0 + 1e-15); // >= the exact sum
             travel_x_[i] = p_.x[i];
             travel_q_[i] = p_.q[i];
