@@ -164,28 +164,39 @@ void System::rotate_bodies(int kicks, bool drift) {
     const auto runs = static_cast<std::ptrdiff_t>((n + run - 1) / run);
     const bool parallel = parallel_body_passes();
     detail::in_team(parallel ? threads_ : 1, [&] {
+        // The arrays and counts as the thread's own locals: read through the members (or
+        // references), every store of a body's state (Eigen's vector stores may alias anything)
+        // made the loops load the arrays' addresses and `kicks` again.
+        const std::uint32_t* const index = bodies_.data();
+        Vec3* const ang_mom = p_.ang_mom.data();
+        const Vec3* const torque = p_.torque.data();
+        const Vec3* const inertia = p_.inertia.data();
+        Quat* const q = p_.q.data();
+        Mat3* const rot = rot_.data();
+        Vec3* const omega = p_.omega.data();
+        const double dt = spec_.time_step;
+        const int n_kicks = kicks;
+        const double half_dt = h;
 #pragma omp for schedule(static)
         for (std::ptrdiff_t r = 0; r < runs; ++r) {
             const std::size_t b0 = static_cast<std::size_t>(r) * run;
             const std::size_t b1 = std::min(n, b0 + run);
             for (std::size_t b = b0; b < b1; ++b) {
-                const std::uint32_t i = bodies_[b];
-                for (int k = 0; k < kicks; ++k) {
-                    geometry::kick_angular_momentum(p_.ang_mom[i], p_.torque[i], h);
+                const std::uint32_t i = index[b];
+                for (int k = 0; k < n_kicks; ++k) {
+                    geometry::kick_angular_momentum(ang_mom[i], torque[i], half_dt);
                 }
             }
             if (drift) {
-                geometry::free_rotate_bodies(bodies_.data() + b0, b1 - b0, p_.q.data(), rot_.data(),
-                                             p_.ang_mom.data(), p_.inertia.data(), spec_.time_step);
+                geometry::free_rotate_bodies(index + b0, b1 - b0, q, rot, ang_mom, inertia, dt);
                 for (std::size_t b = b0; b < b1; ++b) {
-                    const std::uint32_t i = bodies_[b];
-                    rot_[i] = geometry::unit_rotation_matrix(p_.q[i]);
+                    const std::uint32_t i = index[b];
+                    rot[i] = geometry::unit_rotation_matrix(q[i]);
                 }
             }
             for (std::size_t b = b0; b < b1; ++b) {
-                const std::uint32_t i = bodies_[b];
-                p_.omega[i] =
-                    geometry::angular_velocity_world(rot_[i], p_.ang_mom[i], p_.inertia[i]);
+                const std::uint32_t i = index[b];
+                omega[i] = geometry::angular_velocity_world(rot[i], ang_mom[i], inertia[i]);
             }
         }
     });
