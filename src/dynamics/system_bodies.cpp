@@ -795,30 +795,41 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 for (std::size_t q = 0; q < x_queued; ++q) {
                     contact::evaluate_block(law, fn_floor, rolling, xb, q, dt);
                 }
+                // Arrays and totals as locals: through the members every store (Eigen's vector
+                // stores may alias anything) made the loop load them again. The totals add up in
+                // the same order.
+                Vec3* const force = p_.force.data();
+                Vec3* const torque = p_.torque.data();
+                BodyContactEntry* const entries = next_contacts_.data();
+                const bool onsets = record_body_onsets_;
+                double energy = queue_totals->energy;
+                double max_ratio = queue_totals->max_ratio;
                 for (std::size_t q = 0; q < x_queued; ++q) {
                     const std::uint32_t a = x_a[q];
                     const std::uint32_t b = x_b[q];
                     const Vec3 f(xb.f[0][q], xb.f[1][q], xb.f[2][q]);
                     const Vec3 ra(x_ra[0][q], x_ra[1][q], x_ra[2][q]);
-                    p_.force[a] += f;
-                    p_.torque[a] += ra.cross(f) + Vec3(xb.ti[0][q], xb.ti[1][q], xb.ti[2][q]);
+                    force[a] += f;
+                    torque[a] += ra.cross(f) + Vec3(xb.ti[0][q], xb.ti[1][q], xb.ti[2][q]);
                     if (b != no_element) { // a wall takes no reaction
                         const Vec3 rb(x_rb[0][q], x_rb[1][q], x_rb[2][q]);
-                        p_.force[b] -= f;
-                        p_.torque[b] += Vec3(xb.tj[0][q], xb.tj[1][q], xb.tj[2][q]) - rb.cross(f);
+                        force[b] -= f;
+                        torque[b] += Vec3(xb.tj[0][q], xb.tj[1][q], xb.tj[2][q]) - rb.cross(f);
                     }
-                    BodyContactEntry& entry = next_contacts_[x_slot[q]];
+                    BodyContactEntry& entry = entries[x_slot[q]];
                     entry.contact.shear = Vec3(xb.s[0][q], xb.s[1][q], xb.s[2][q]);
                     entry.contact.force = f;
-                    if (record_body_onsets_ && x_new[q]) { // heat: impact onset (system.cpp)
+                    if (onsets && x_new[q]) { // heat: impact onset (system.cpp)
                         note_body_onset(entry.key, entry.contact.normal, entry.contact.point,
                                         Vec3(xb.v[0][q], xb.v[1][q], xb.v[2][q]), xb.m_eff[q],
                                         entry.contact.r_eff);
                     }
-                    queue_totals->energy += xb.energy[q];
-                    queue_totals->max_ratio = std::max(queue_totals->max_ratio, x_ratio[q]);
-                    ++queue_totals->contacts;
+                    energy += xb.energy[q];
+                    max_ratio = std::max(max_ratio, x_ratio[q]);
                 }
+                queue_totals->energy = energy;
+                queue_totals->max_ratio = max_ratio;
+                queue_totals->contacts += static_cast<long>(x_queued);
                 x_queued = 0;
             };
             // Queues the touching contact ec of an element of a with an element of b (b < 0: a
