@@ -391,6 +391,9 @@ class System {
     std::vector<BoxPairQuery> box_queries_;
     std::vector<std::uint32_t> box_hits_;
     std::vector<std::uint32_t> box_slot_; // per hit: its pair in box_queries_, or none
+    // Per particle: 1 for a single polyhedron that is a box along its body axes, its orientation
+    // finite (set at the posing), else 0.
+    std::vector<std::uint8_t> box_body_;
     std::vector<const BodyContact*> box_old_;
     std::vector<ElementContact> box_found_;
     // Per list entry of two single polyhedra whose cached direction proved them apart: the pose
@@ -420,7 +423,6 @@ class System {
     std::vector<Vec3> travel_x_;
     std::vector<Quat> travel_q_;
     std::vector<double> apart_below_;
-    std::vector<std::uint32_t> skipped_; // this step's skipped near misses (scratch)
     // Per shape: the hull of a polyhedron posed in place by body_forces, or nullptr (scratch).
     std::vector<const geometry::ConvexPolyhedron*> pose_hulls_;
     // Per body-wall candidate (body_walls_): for a single polyhedron apart from a plane wall, the

@@ -588,6 +588,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             pose_hulls_[s] = hull;
         }
     }
+    box_body_.resize(p_.size());
     std::size_t n_convex = 0;        // particles of one convex element (polyhedron, superquadric)
     bool unexpected = false;         // a particle that is not a clump posed as several elements
     std::exception_ptr posing_error; // the first exception of the posing, if any
@@ -598,6 +599,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             const auto i = static_cast<std::size_t>(pi);
             const std::size_t e0 = element_begin_[i];
             MemberSphere* out = member_c_.data() + e0;
+            box_body_[i] = 0;
             const int shape = p_.shape[i];
             if (shape < 0) { // a sphere
                 *out = {p_.x[i].x(), p_.x[i].y(), p_.x[i].z(), p_.radius[i]};
@@ -614,6 +616,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 E.hull = hull;
                 E.r_equiv = f.r_equiv;
                 *out = {p_.x[i].x(), p_.x[i].y(), p_.x[i].z(), 0.0};
+                box_body_[i] =
+                    f.box && f.box->aligned && std::isfinite(p_.q[i].squaredNorm()) ? 1 : 0;
                 ++n_convex;
                 continue;
             }
@@ -1408,16 +1412,17 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // difference of round-off between the two expressions cannot drop a contact.
             // A general hit whose near-miss bound still holds (apart_below_, a sound bound of
             // the overlap along its cached direction below minus twice the margin, so the proof
-            // or the vertex scan in general_entry would answer "apart") is not visited: it goes to
-            // `skipped_`, where it is only counted as general_entry counts it.
+            // or the vertex scan in general_entry would answer "apart") is not visited: it is
+            // only counted as general_entry counts it (its bounding-sphere test, by the same
+            // expression, then a call and a separation skip: the bound is cleared by the full
+            // route, so the pair had no contact at the last step).
             const std::size_t n_members = member_pairs_.size();
             member_hits_.resize(n_members);
-            skipped_.resize(n_members);
             std::size_t n_hits = 0;
-            std::size_t n_skipped = 0;
-            // The pass over items [i0, i1): their hits and skips written from member_hits_[i0]
-            // and skipped_[i0] on (a hit's index is never below the count before it, so a range
-            // writes only within itself), their counts to nh and ns.
+            std::size_t n_skipped = 0; // skipped near misses that general_entry would count
+            // The pass over items [i0, i1): their hits written from member_hits_[i0] on (a hit's
+            // index is never below the count before it, so a range writes only within itself),
+            // their count to nh, the counted skips to ns.
             const auto first_pass = [&](std::size_t i0, std::size_t i1, std::size_t& nh,
                                         std::size_t& ns) {
                 const MemberPair* mp = member_pairs_.data();
@@ -1428,7 +1433,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 const double* below = apart_below_.data();
                 const bool skips = separation_cache_ && !apart_below_.empty();
                 std::uint32_t* hits = member_hits_.data() + i0;
-                std::uint32_t* skipped = skipped_.data() + i0;
                 std::size_t n_h = 0;
                 std::size_t n_s = 0;
                 for (std::size_t i = i0; i < i1; ++i) {
@@ -1445,8 +1449,11 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         if (skips) {
                             const bool skip =
                                 hit & (travel[mp[i].a] + travel[mp[i].b] < below[mp[i].k]);
-                            skipped[n_s] = static_cast<std::uint32_t>(i);
-                            n_s += static_cast<std::size_t>(skip);
+                            // single_query's own test (one for two single polyhedra: each
+                            // element's centre and radius are its body's)
+                            const double rsum = rad[mp[i].a] + rad[mp[i].b];
+                            const bool counted = (pa - pb).squaredNorm() < rsum * rsum;
+                            n_s += static_cast<std::size_t>(skip & counted);
                             hit = hit & !skip;
                         }
                     } else {
@@ -1466,9 +1473,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 ns = n_s;
             };
             // With several threads and enough bodies, the pass runs over ranges of items in
-            // parallel, and each range's hits and skips are moved down after those of the
-            // ranges before it: the same lists, in the same order (whatever the ranges: a few
-            // per thread, of 256 to 4096 items).
+            // parallel, and each range's hits are moved down after those of the ranges before
+            // it: the same list, in the same order (whatever the ranges: a few per thread, of 256
+            // to 4096 items).
             const std::size_t pass_range = std::clamp<std::size_t>(
                 n_members / (4 * static_cast<std::size_t>(threads_)), 256, 4096);
             if (parallel_body_passes() && n_members > pass_range) {
@@ -1485,28 +1492,16 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 for (std::size_t r = 0; r < n_ranges; ++r) { // moved down: to <= from
                     const auto from = static_cast<std::ptrdiff_t>(r * pass_range);
                     const auto nh = static_cast<std::ptrdiff_t>(range_counts_[2 * r]);
-                    const auto ns = static_cast<std::ptrdiff_t>(range_counts_[2 * r + 1]);
                     std::copy(member_hits_.begin() + from, member_hits_.begin() + from + nh,
                               member_hits_.begin() + static_cast<std::ptrdiff_t>(n_hits));
-                    std::copy(skipped_.begin() + from, skipped_.begin() + from + ns,
-                              skipped_.begin() + static_cast<std::ptrdiff_t>(n_skipped));
                     n_hits += range_counts_[2 * r];
                     n_skipped += range_counts_[2 * r + 1];
                 }
             } else {
                 first_pass(0, n_members, n_hits, n_skipped);
             }
-            // The skipped near misses: the counts of general_entry's bounding-sphere tests (one
-            // test for two single polyhedra: each element's centre and radius are its body's) and
-            // of its proof (no contact at the last step: the bound is cleared by the full route).
-            for (std::size_t s = 0; s < n_skipped; ++s) {
-                const MemberPair& m = member_pairs_[skipped_[s]];
-                const double rsum = p_.radius[m.a] + p_.radius[m.b];
-                if ((p_.x[m.a] - p_.x[m.b]).squaredNorm() < rsum * rsum) {
-                    ++np_.calls;
-                    ++separation_skips_;
-                }
-            }
+            np_.calls += static_cast<long>(n_skipped);
+            separation_skips_ += static_cast<long>(n_skipped);
             // With several threads, the queries of the single_convex entries and the narrow
             // phases of the other general entries (a clump against a convex body) run first, in
             // parallel, and the serial pass below takes their answers in its order. Each reads
@@ -1624,11 +1619,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 // single_query's tests up to its narrow phase (the others, and a pair that fails
                 // one, take single_query in the serial pass). The contacts to single_query's
                 // results, in hit order.
-                const auto aligned_box = [&](std::uint32_t e) {
-                    const Element& E = elements_[e];
-                    return !(member_c_[e].r > 0.0) && E.kind == Element::Kind::polyhedron &&
-                           E.poly->box && E.poly->box->aligned;
-                };
                 // Last step's records: the hits come in the serial pass's order, so a cursor of
                 // the box pass's own walks the table as find_old's does.
                 std::size_t seek = 0;
@@ -1637,33 +1627,33 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 box_old_.clear();
                 for (std::size_t h = 0; h < n_hits; ++h) {
                     const MemberPair& m = member_pairs_[member_hits_[h]];
-                    if (m.ea != no_element || !single_convex(m.a, m.b)) {
-                        continue;
-                    }
-                    const std::uint32_t a0 = element_begin_[m.a];
-                    const std::uint32_t b0 = element_begin_[m.b];
-                    if (!aligned_box(a0) || !aligned_box(b0) ||
+                    // Two single polyhedra, boxes along their body axes, finite orientations
+                    // (box_body_, from the posing; single_convex holds for them).
+                    if (m.ea != no_element || (box_body_[m.a] & box_body_[m.b]) == 0 ||
                         (separation_cache_ && sep_dirs_[m.k].squaredNorm() > 0.0)) {
                         continue;
                     }
-                    const Element& A = elements_[a0];
-                    const Element& B = elements_[b0];
+                    // single_query's bounding-sphere tests: for single polyhedra (element centre
+                    // and radius those of the body) the three of spheres_apart are this one.
                     const double rsum = p_.radius[m.a] + p_.radius[m.b];
-                    if ((p_.x[m.a] - p_.x[m.b]).squaredNorm() >= rsum * rsum ||
-                        spheres_apart(A, B, m.a, m.b)) {
+                    if ((p_.x[m.a] - p_.x[m.b]).squaredNorm() >= rsum * rsum) {
                         continue;
                     }
+                    const Element& A = elements_[element_begin_[m.a]];
+                    const Element& B = elements_[element_begin_[m.b]];
                     // The common plane's own first tests: finite poses, bounding spheres.
                     const double dist = (B.centre - A.centre).norm();
-                    if (!std::isfinite(dist) || !std::isfinite(A.q.squaredNorm()) ||
-                        !std::isfinite(B.q.squaredNorm()) ||
-                        dist > A.poly->radius + B.poly->radius) {
+                    if (!std::isfinite(dist) || dist > A.poly->radius + B.poly->radius) {
                         continue;
                     }
                     const BodyContact* old = record_from(seek, ContactGroup(0, m.k, 0, 0), 0);
                     if (old == nullptr) {
                         continue;
                     }
+                    // The cached direction and proof as single_query leaves them after its
+                    // narrow phase; the contact goes to the law in the serial pass (take_box).
+                    sep_proofs_[m.k].valid = false;
+                    apart_below_[m.k] = -std::numeric_limits<double>::infinity();
                     box_slot_[h] = static_cast<std::uint32_t>(box_queries_.size());
                     box_queries_.push_back({&A, &B, &rot_[m.a], &rot_[m.b]});
                     box_hits_.push_back(static_cast<std::uint32_t>(h));
@@ -1685,13 +1675,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                                           box_found_.data() + p0);
                     }
                 });
-                // The cached direction and proof as single_query leaves them after its narrow
-                // phase; the contacts go to the law in the serial pass (take_box).
-                for (const std::uint32_t h : box_hits_) {
-                    const std::uint32_t k = member_pairs_[member_hits_[h]].k;
-                    sep_proofs_[k].valid = false;
-                    apart_below_[k] = -std::numeric_limits<double>::infinity();
-                }
             }
             if (ahead) {
                 const auto hits = static_cast<std::ptrdiff_t>(n_hits);
