@@ -1132,10 +1132,13 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                             const double along = m.dot(p_.x[b] - p_.x[a]);
                             const double margin = polyhedra_separation_margin(A, B);
                             if (proof.valid) {
+                                // (One root of the smaller square: the same number as the
+                                // smaller of the two norms, the root being monotone and
+                                // correctly rounded.)
                                 const auto turn = [](const Quat& q, const Quat& q0) {
-                                    const double minus = (q.coeffs() - q0.coeffs()).norm();
-                                    const double plus = (q.coeffs() + q0.coeffs()).norm();
-                                    return 2.0 * std::min(minus, plus) * (1.0 + 1e-9);
+                                    const double minus = (q.coeffs() - q0.coeffs()).squaredNorm();
+                                    const double plus = (q.coeffs() + q0.coeffs()).squaredNorm();
+                                    return 2.0 * std::sqrt(std::min(minus, plus)) * (1.0 + 1e-9);
                                 };
                                 const double bound = proof.overlap + (along - proof.along) +
                                                      A.poly->radius * turn(A.q, proof.qa) +
