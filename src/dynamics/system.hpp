@@ -384,12 +384,10 @@ class System {
     // The answers do not depend on it.
     std::vector<geometry::PlaneMemo> plane_memos_;
     bool plane_memo_ = true;
-    // The resting box pairs of one evaluation (body_forces): their queries, the hits they came
-    // from (and per hit its pair), their last step's records and their contacts
-    // (box_pair_contacts).
+    // The resting box pairs of one evaluation (body_forces): their queries, per hit its pair,
+    // their last step's records and their contacts (box_pair_contacts).
     bool box_lanes_ = true;
     std::vector<BoxPairQuery> box_queries_;
-    std::vector<std::uint32_t> box_hits_;
     std::vector<std::uint32_t> box_slot_; // per hit: its pair in box_queries_, or none
     // Per particle: 1 for a single polyhedron that is a box along its body axes, its orientation
     // finite (set at the posing), else 0.

@@ -1207,13 +1207,21 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             };
             // A contact found by single_query or wall_query to the law, in the serial order
             // (b: the other particle, or -1 for a wall; `t`: the totals apply counts it in).
+            // A touching contact of a convex element to the law: the convex block's queue, or
+            // `apply` at once without it (arguments as apply's).
+            const auto to_law = [&](std::uint32_t a, long b, const BodyContactKey& key,
+                                    const ContactGroup& g, const ElementContact& ec,
+                                    const BodyContact* old, int material, double ratio,
+                                    ChunkTotals& t) {
+                if (convex_blocks_) {
+                    queue_convex(a, b, key, g, ec, old, material, ratio);
+                } else {
+                    apply(a, b, key, g, ec, old, material, ratio, t);
+                }
+            };
             const auto hand_over = [&](const AheadPair& s, long b, const ContactGroup& g,
                                        int material, ChunkTotals& t) {
-                if (convex_blocks_) {
-                    queue_convex(s.a, b, s.key, g, s.ec, s.old, material, s.ratio);
-                } else {
-                    apply(s.a, b, s.key, g, s.ec, s.old, material, s.ratio, t);
-                }
+                to_law(s.a, b, s.key, g, s.ec, s.old, material, s.ratio, t);
             };
             // The counts and the contact of a single_query, taken in the serial order.
             const auto take_single = [&](std::uint32_t k, const AheadPair& s) {
@@ -1237,12 +1245,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 }
                 const BodyContactKey key{p_.id[m.a], p_.id[m.b], 0, 0};
                 const double ratio = ec.overlap / ratio_size(*box_queries_[i].a, box_queries_[i].b);
-                const ContactGroup g(0, m.k, 0, 0);
-                if (convex_blocks_) {
-                    queue_convex(m.a, m.b, key, g, ec, box_old_[i], p_.material[m.b], ratio);
-                } else {
-                    apply(m.a, m.b, key, g, ec, box_old_[i], p_.material[m.b], ratio, pair_totals);
-                }
+                to_law(m.a, m.b, key, ContactGroup(0, m.k, 0, 0), ec, box_old_[i], p_.material[m.b],
+                       ratio, pair_totals);
             };
             AheadPair one; // the serial pass's single_query
             // The general route of entry k. `lookup(g, eb)`: last step's record (find_old in the
@@ -1342,12 +1346,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                         separation_skips_ += ec.proved_apart ? 1 : 0;
                         np_.fallbacks += ec.fell_back ? 1 : 0;
                         np_.failures += ec.converged ? 0 : 1;
-                        if (ec.touching && convex_blocks_) {
-                            queue_convex(a, b, key, g, ec, old, p_.material[b],
-                                         ec.overlap / ratio_size(A, &B));
-                        } else if (ec.touching) {
-                            apply(a, b, key, g, ec, old, p_.material[b],
-                                  ec.overlap / ratio_size(A, &B), pair_totals);
+                        if (ec.touching) {
+                            to_law(a, b, key, g, ec, old, p_.material[b],
+                                   ec.overlap / ratio_size(A, &B), pair_totals);
                         }
                     }
                 }
@@ -1620,8 +1621,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             constexpr std::uint32_t no_box = 0xffffffffU;
             if (boxes_ahead) {
                 box_slot_.assign(n_hits, no_box);
-            }
-            if (boxes_ahead) {
                 // The pairs: one polyhedron on each side, both boxes along their body axes,
                 // touching at the last step (a record) and without a cached direction, past
                 // single_query's tests up to its narrow phase (the others, and a pair that fails
@@ -1631,7 +1630,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                 // the box pass's own walks the table as find_old's does.
                 std::size_t seek = 0;
                 box_queries_.clear();
-                box_hits_.clear();
                 box_old_.clear();
                 for (std::size_t h = 0; h < n_hits; ++h) {
                     const MemberPair& m = member_pairs_[member_hits_[h]];
@@ -1664,7 +1662,6 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     apart_below_[m.k] = -std::numeric_limits<double>::infinity();
                     box_slot_[h] = static_cast<std::uint32_t>(box_queries_.size());
                     box_queries_.push_back({&A, &B, &rot_[m.a], &rot_[m.b]});
-                    box_hits_.push_back(static_cast<std::uint32_t>(h));
                     box_old_.push_back(old);
                 }
                 box_found_.resize(box_queries_.size());

@@ -30,17 +30,14 @@ namespace {
 /// GCC contracts their products, stays as it was (test PatchOnDemandGivesTheSameNumbers).
 [[gnu::noinline]] int box_support(const PolyhedronFeatures::Box& box, double radius,
                                   const Vec3& d_body) {
-    const Vec3 g = box.aligned ? d_body : Vec3(box.axes.transpose() * d_body);
+    const Vec3 g = box.along(d_body);
     const Vec3 lead = 2.0 * box.half.cwiseProduct(g.cwiseAbs());
     if (!(lead.minCoeff() > 1e-11 * radius * d_body.cwiseAbs().sum())) {
         return -1;
     }
-    const int s = (g[0] > 0.0 ? 1 : 0) | (g[1] > 0.0 ? 2 : 0) | (g[2] > 0.0 ? 4 : 0);
-    return box.corner[static_cast<std::size_t>(s)];
+    return box.corner[PolyhedronFeatures::Box::corner_of(g)];
 }
-} // namespace
 
-namespace {
 /// The common plane's normal turned to the world (q * m, m in A's frame). One compiled copy for
 /// every place that reports it: inlined, GCC contracts the product's multiply-adds per call site,
 /// and the patch's normal and the plane's own (PatchOnDemandGivesTheSameNumbers) parted by an ulp
@@ -166,9 +163,7 @@ std::optional<PolyhedronFeatures::Box> box_with_corners(const PolyhedronFeatures
     }
     std::array<bool, 8> seen{};
     for (std::size_t i = 0; i < f.vertices.size(); ++i) {
-        const Vec3 g = b->axes.transpose() * f.vertices[i];
-        const auto s = static_cast<std::size_t>((g[0] > 0.0 ? 1 : 0) | (g[1] > 0.0 ? 2 : 0) |
-                                                (g[2] > 0.0 ? 4 : 0));
+        const std::size_t s = PolyhedronFeatures::Box::corner_of(b->along(f.vertices[i]));
         if (seen[s]) {
             return std::nullopt;
         }
@@ -1031,8 +1026,7 @@ double polyhedron_overlap_along(const PosedPolyhedron& a, const PosedPolyhedron&
         if (!f.box) {
             return top(f.vertices, d);
         }
-        const Vec3 g = f.box->aligned ? d : Vec3(f.box->axes.transpose() * d);
-        return f.box->half.dot(g.cwiseAbs());
+        return f.box->half.dot(f.box->along(d).cwiseAbs());
     };
     const Vec3 mb = b.q.conjugate() * m;
     const Vec3 ma = a.q.conjugate() * m;

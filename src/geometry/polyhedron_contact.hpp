@@ -66,6 +66,16 @@ struct PolyhedronFeatures {
         /// The vertex on each corner: corner[s] for the corner on the + side of axes.col(k)
         /// where bit k of s is set.
         std::array<int, 8> corner{};
+        /// A body-frame vector along the axes: axes^T d (d itself where aligned).
+        [[nodiscard]] Vec3 along(const Vec3& d) const {
+            return aligned ? d : Vec3(axes.transpose() * d);
+        }
+        /// The index into `corner` of the corner on the + side of each axis where g (a vector
+        /// along the axes) is positive.
+        [[nodiscard]] static std::size_t corner_of(const Vec3& g) {
+            return static_cast<std::size_t>((g[0] > 0.0 ? 1 : 0) | (g[1] > 0.0 ? 2 : 0) |
+                                            (g[2] > 0.0 ? 4 : 0));
+        }
     };
     /// Set by polyhedron_features when the polyhedron is a box to 1e-12 of its radius (face
     /// normals opposite and orthogonal, every vertex on a corner); empty for other shapes.
