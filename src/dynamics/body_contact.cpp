@@ -831,20 +831,24 @@ void box_pair_contacts(const BoxPairQuery* pairs, std::size_t n, ElementContact*
             int low_b = 0;
             double off_a[3] = {0.0, 0.0, 0.0};
             double off_b[3] = {0.0, 0.0, 0.0};
-            double wa = 0.0;
-            double wb = 0.0;
+            // The turn of the last axis within the band gives the weight (one division per
+            // body, taken after the loop).
+            double ta = 0.0;
+            double tb = 0.0;
             for (int k = 0; k < 3; ++k) {
                 const bool in_a = lanes.ea[k][q] < band;
                 const bool in_b = lanes.eb[k][q] < band;
                 low_a += in_a ? 1 : 0;
                 low_b += in_b ? 1 : 0;
-                wa = in_a ? 1.0 - lanes.ea[k][q] / band : wa;
-                wb = in_b ? 1.0 - lanes.eb[k][q] / band : wb;
+                ta = in_a ? lanes.ea[k][q] : ta;
+                tb = in_b ? lanes.eb[k][q] : tb;
                 for (int i = 0; i < 3; ++i) {
                     off_a[i] = in_a ? -2.0 * lanes.corner_a[k][q] * ra[3 * i + k][q] : off_a[i];
                     off_b[i] = in_b ? -2.0 * lanes.corner_b[k][q] * rb[3 * i + k][q] : off_b[i];
                 }
             }
+            const double wa = low_a > 0 ? 1.0 - ta / band : 0.0;
+            const double wb = low_b > 0 ? 1.0 - tb / band : 0.0;
             double pa[3];
             double pb[3];
             double nw[3];
