@@ -190,6 +190,10 @@ class System {
     /// the route before session 12, for tests and A/B). Same contacts and order; the forces agree
     /// to round-off (GCC contracts a * b + c differently in the two routes).
     void use_convex_blocks(bool on) { convex_blocks_ = on; }
+    /// The member build's test of two clumps' members eight members at a time in vector lanes
+    /// (AVX-512 builds; on, the default) or in the scalar double loop (off, for tests and A/B).
+    /// The same pairs in the same order, so the same bits.
+    void use_member_lanes(bool on) { member_lanes_ = on; }
     /// Bodies from which the per-body passes of a step (posing, rotation), the first pass over
     /// member pairs and the law of clump member pairs run on several threads, when there are
     /// several (default 256: the lattice scenes of 343 clumps gain 1.10-1.17x with two threads,
@@ -228,6 +232,9 @@ class System {
     /// Box pair queries answered in vector lanes (use_box_lanes), since construction (not saved
     /// in checkpoints; for tests and A/B).
     [[nodiscard]] long box_lane_pairs() const { return box_lane_pairs_; }
+    /// Member pairs and general items listed by the member builds since construction (not saved
+    /// in checkpoints; for tests and A/B of use_member_lanes).
+    [[nodiscard]] long member_pairs_built() const { return member_pairs_built_; }
 
   private:
     /// Sums of one work unit (a chunk of list entries or wall candidates).
@@ -371,6 +378,9 @@ class System {
     std::vector<std::vector<MemberPair>> range_pairs_;
     std::vector<std::vector<BodyContactKey>> range_keys_;
     std::vector<std::size_t> range_offsets_; // where each range's pairs go in member_pairs_
+    // build_member_pairs: the posed members by component (x, y, z, r; each member_c_.size()
+    // long), for its pair test eight members at a time (scratch).
+    std::vector<double> member_cols_;
     // Per list entry of two single convex elements (polyhedra, superquadrics): a direction (unit,
     // from b's element to a's, a the particle with the smaller id, world frame) that separated them
     // at an earlier step, or zero; reset at every list build and restart (element_contact's
@@ -387,6 +397,8 @@ class System {
     // The resting box pairs of one evaluation (body_forces): their queries, per hit its pair,
     // their last step's records and their contacts (box_pair_contacts).
     bool box_lanes_ = true;
+    bool member_lanes_ = true;    // use_member_lanes
+    long member_pairs_built_ = 0; // member_pairs_built
     std::vector<BoxPairQuery> box_queries_;
     std::vector<std::uint32_t> box_slot_; // per hit: its pair in box_queries_, or none
     // Per particle: 1 for a single polyhedron that is a box along its body axes, its orientation

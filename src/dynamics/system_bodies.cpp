@@ -8,6 +8,7 @@
 #include "geometry/rotation.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <exception>
 #include <limits>
@@ -16,6 +17,10 @@
 #include <utility>
 #include <variant>
 #include <vector>
+
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
 
 namespace kiln::dynamics {
 
@@ -371,6 +376,81 @@ void System::build_member_pairs() {
         }
         return true;
     };
+#if defined(__AVX512F__)
+    // The posed members by component, for lane_pairs.
+    const bool lanes = member_lanes_;
+    const std::size_t n_members_all = member_c_.size();
+    member_cols_.resize(lanes ? 4 * n_members_all : 0);
+    for (std::size_t e = 0; lanes && e < n_members_all; ++e) {
+        member_cols_[e] = member_c_[e].x;
+        member_cols_[n_members_all + e] = member_c_[e].y;
+        member_cols_[2 * n_members_all + e] = member_c_[e].z;
+        member_cols_[3 * n_members_all + e] = member_c_[e].r;
+    }
+    // The double loop below over near_a x near_b for a body b of at most 64 members: per member
+    // of a, b's members eight at a time from their columns (b's slots are contiguous), the
+    // double loop's test in each lane, then the pairs with the members of near_b among those
+    // that pass, in the double loop's order. The test's numbers are those of the scalar form as
+    // GCC compiles Eigen's squaredNorm there (dx^2 + dy^2 rounded twice, then dz^2 fused in) and
+    // (A.r + B.r) + skin squared; written with the rounding-mode forms of the add and multiply,
+    // which GCC does not fuse into FMAs as it would the plain ones.
+    const auto lane_pairs = [&](std::uint32_t k, std::uint32_t a, std::uint32_t b,
+                                const std::vector<std::uint32_t>& near_a,
+                                const std::vector<std::uint32_t>& near_b,
+                                std::vector<MemberPair>& pairs, std::vector<BodyContactKey>& keys) {
+        const std::uint32_t b0 = element_begin_[b];
+        const std::uint32_t nb_e = element_begin_[b + 1] - b0;
+        std::uint64_t near_bits = 0;
+        for (const std::uint32_t eb : near_b) {
+            near_bits |= std::uint64_t{1} << (eb - b0);
+        }
+        const double* cx = member_cols_.data() + b0;
+        const double* cy = cx + n_members_all;
+        const double* cz = cy + n_members_all;
+        const double* cr = cz + n_members_all;
+        constexpr int mode = _MM_FROUND_CUR_DIRECTION;
+        constexpr __mmask8 all = 0xff; // (the maskz forms: GCC 12's unmasked ones warn)
+        const __m512d skin_v = _mm512_set1_pd(skin);
+        for (const std::uint32_t ea : near_a) {
+            const MemberSphere& A = member_c_[ea];
+            const __m512d ax = _mm512_set1_pd(A.x);
+            const __m512d ay = _mm512_set1_pd(A.y);
+            const __m512d az = _mm512_set1_pd(A.z);
+            const __m512d ar = _mm512_set1_pd(A.r);
+            std::uint64_t hits = 0;
+            for (std::uint32_t j = 0; j < nb_e; j += 8) {
+                const auto lanes_in =
+                    static_cast<__mmask8>(nb_e - j >= 8 ? 0xffU : (1U << (nb_e - j)) - 1U);
+                const __m512d dx = _mm512_maskz_sub_round_pd(
+                    all, ax, _mm512_maskz_loadu_pd(lanes_in, cx + j), mode);
+                const __m512d dy = _mm512_maskz_sub_round_pd(
+                    all, ay, _mm512_maskz_loadu_pd(lanes_in, cy + j), mode);
+                const __m512d dz = _mm512_maskz_sub_round_pd(
+                    all, az, _mm512_maskz_loadu_pd(lanes_in, cz + j), mode);
+                const __m512d xy =
+                    _mm512_maskz_add_round_pd(all, _mm512_maskz_mul_round_pd(all, dx, dx, mode),
+                                              _mm512_maskz_mul_round_pd(all, dy, dy, mode), mode);
+                const __m512d d2 = _mm512_fmadd_pd(dz, dz, xy);
+                const __m512d reach = _mm512_maskz_add_round_pd(
+                    all,
+                    _mm512_maskz_add_round_pd(all, ar, _mm512_maskz_loadu_pd(lanes_in, cr + j),
+                                              mode),
+                    skin_v, mode);
+                const __mmask8 in = _mm512_mask_cmp_pd_mask(
+                    lanes_in, d2, _mm512_maskz_mul_round_pd(all, reach, reach, mode), _CMP_LT_OQ);
+                hits |= static_cast<std::uint64_t>(in) << j;
+            }
+            for (hits &= near_bits; hits != 0; hits &= hits - 1) {
+                const auto j = static_cast<std::uint32_t>(std::countr_zero(hits));
+                const std::uint32_t eb = b0 + j;
+                pairs.push_back({k, a, b, ea, eb});
+                keys.push_back({p_.id[a], p_.id[b],
+                                static_cast<std::int32_t>(ea - element_begin_[a]),
+                                static_cast<std::int32_t>(j)});
+            }
+        }
+    };
+#endif
     // The member pairs of list entry k, appended to `pairs` and `keys` (near_a, near_b: scratch).
     const auto entry_pairs =
         [&](std::uint32_t k, std::vector<MemberPair>& pairs, std::vector<BodyContactKey>& keys,
@@ -410,6 +490,12 @@ void System::build_member_pairs() {
                     return;
                 }
                 near_members(b, a, near_b);
+#if defined(__AVX512F__)
+                if (lanes && nb_e <= 64 && !near_b.empty()) {
+                    lane_pairs(k, a, b, near_a, near_b, pairs, keys);
+                    return;
+                }
+#endif
             } else {
                 near_a.resize(na);
                 std::iota(near_a.begin(), near_a.end(), element_begin_[a]);
@@ -485,6 +571,7 @@ void System::build_member_pairs() {
             }
         }
     }
+    member_pairs_built_ += static_cast<long>(member_pairs_.size());
     // The poses of this build, for body_forces' rebuild test: every element centre, and per
     // particle its centre, R and farthest element centre.
     member_x_build_.resize(member_c_.size());
