@@ -190,9 +190,10 @@ class System {
     /// the route before session 12, for tests and A/B). Same contacts and order; the forces agree
     /// to round-off (GCC contracts a * b + c differently in the two routes).
     void use_convex_blocks(bool on) { convex_blocks_ = on; }
-    /// The member build's test of two clumps' members eight members at a time in vector lanes
-    /// (AVX-512 builds; on, the default) or in the scalar double loop (off, for tests and A/B).
-    /// The same pairs in the same order, so the same bits.
+    /// The member build's test of two clumps' members, and the first pass of a clump's members
+    /// against a plane wall, eight members at a time in vector lanes (AVX-512 builds; on, the
+    /// default) or one at a time (off, for tests and A/B). The same pairs and wall contacts in
+    /// the same order, so the same bits.
     void use_member_lanes(bool on) { member_lanes_ = on; }
     /// Bodies from which the per-body passes of a step (posing, rotation), the first pass over
     /// member pairs and the law of clump member pairs run on several threads, when there are

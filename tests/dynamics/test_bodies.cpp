@@ -370,27 +370,33 @@ TEST(Bodies, ClumpBoxGivesTheSameBitsForOneAndTwoThreads) {
 }
 
 TEST(Bodies, MemberPairsInLanesAreTheDoubleLoops) {
-    // The member build tests two clumps' members eight at a time in vector lanes (AVX-512
-    // builds) or in the scalar double loop: the same pairs in the same order, so the same count
-    // over every build and the same bits at every step (a pair the lanes missed would miss its
-    // contact; one they added would show in the count). The clump box's 12-sphere clumps take
-    // the members' pre-selection, the route the lanes replace.
+    // The member build tests two clumps' members, and the first pass tests a clump's members
+    // against a plane wall, eight at a time in vector lanes (AVX-512 builds) or one at a time:
+    // the same pairs in the same order, so the same count over every build and the same bits
+    // at every step (a pair the lanes missed would miss its contact; one they added would show
+    // in the count; a member the wall's pass missed would miss its wall contact). The clump
+    // box's 12-sphere clumps take the members' pre-selection, the route the lanes replace, and
+    // meet the six walls from the first steps.
     System a(clump_box(1));
     System b(clump_box(1));
     b.use_member_lanes(false);
     long contacts = 0;
+    long wall_contacts = 0;
     for (int k = 0; k < 3000; ++k) {
         a.step();
         b.step();
         contacts += a.counters().particle_contacts;
+        wall_contacts += a.counters().wall_contacts;
         ASSERT_EQ(a.counters().particle_contacts, b.counters().particle_contacts) << k;
+        ASSERT_EQ(a.counters().wall_contacts, b.counters().wall_contacts) << k;
         ASSERT_EQ(a.member_pairs_built(), b.member_pairs_built()) << k;
     }
     EXPECT_GT(contacts, 20000); // or the test proves little
+    EXPECT_GT(wall_contacts, 1000);
     EXPECT_GT(a.member_pairs_built(), 2000);
     test::expect_same_bits(a.particles(), b.particles());
-    std::printf("%ld member pairs listed over the builds, %ld contacts\n", a.member_pairs_built(),
-                contacts);
+    std::printf("%ld member pairs listed over the builds, %ld contacts, %ld wall contacts\n",
+                a.member_pairs_built(), contacts, wall_contacts);
 }
 
 // advance(k) defers every step's second half kick (of v and of the bodies' angular momentum) to
