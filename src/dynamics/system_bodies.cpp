@@ -438,31 +438,63 @@ void System::build_member_pairs() {
         member_cols_[2 * n_members_all + e] = member_c_[e].z;
         member_cols_[3 * n_members_all + e] = member_c_[e].r;
     }
-    // The double loop below over near_a x near_b for a body b of at most 64 members: per member
-    // of a, b's members eight at a time from their columns (b's slots are contiguous), the
-    // double loop's test in each lane, then the pairs with the members of near_b among those
-    // that pass, in the double loop's order. The test's numbers are those of the scalar form as
-    // GCC compiles Eigen's squaredNorm there (dx^2 + dy^2 rounded twice, then dz^2 fused in) and
-    // (A.r + B.r) + skin squared; written with the rounding-mode forms of the add and multiply,
-    // which GCC does not fuse into FMAs as it would the plain ones.
+    // Member e0's column entries onward: x, y, z, r of the members e0, e0 + 1, ...
+    struct Columns {
+        const double *x, *y, *z, *r;
+    };
+    const auto columns = [&](std::uint32_t e0) {
+        const double* x = member_cols_.data() + e0;
+        return Columns{x, x + n_members_all, x + 2 * n_members_all, x + 3 * n_members_all};
+    };
+    // Bit j set when member j of body i can reach body `other` (near_members' test, below; its
+    // margin of 1e-9 of the reach keeps it conservative whatever the rounding), for a body of at
+    // most 64 members.
+    const auto near_bits = [&](std::uint32_t i, std::uint32_t other) {
+        const std::uint32_t i0 = element_begin_[i];
+        const std::uint32_t n_i = element_begin_[i + 1] - i0;
+        const Columns c = columns(i0);
+        const __m512d ox = _mm512_set1_pd(p_.x[other].x());
+        const __m512d oy = _mm512_set1_pd(p_.x[other].y());
+        const __m512d oz = _mm512_set1_pd(p_.x[other].z());
+        const __m512d ro = _mm512_set1_pd(p_.radius[other] + skin);
+        const __m512d widen = _mm512_set1_pd(1.0 + 1e-9);
+        std::uint64_t bits = 0;
+        for (std::uint32_t j = 0; j < n_i; j += 8) {
+            const auto lanes_in =
+                static_cast<__mmask8>(n_i - j >= 8 ? 0xffU : (1U << (n_i - j)) - 1U);
+            const __m512d dx = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes_in, c.x + j), ox);
+            const __m512d dy = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes_in, c.y + j), oy);
+            const __m512d dz = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes_in, c.z + j), oz);
+            const __m512d d2 =
+                _mm512_fmadd_pd(dz, dz, _mm512_fmadd_pd(dy, dy, _mm512_mul_pd(dx, dx)));
+            const __m512d reach =
+                _mm512_mul_pd(_mm512_add_pd(_mm512_maskz_loadu_pd(lanes_in, c.r + j), ro), widen);
+            bits |= static_cast<std::uint64_t>(_mm512_mask_cmp_pd_mask(
+                        lanes_in, d2, _mm512_mul_pd(reach, reach), _CMP_LT_OQ))
+                    << j;
+        }
+        return bits;
+    };
+    // The double loop below over near_a x near_b for bodies of at most 64 members (their near
+    // members as bits, from near_bits): per near member of a, b's members eight at a time from
+    // their columns (b's slots are contiguous), the double loop's test in each lane, then the
+    // pairs with b's near members among those that pass, in the double loop's order. The test's
+    // numbers are those of the scalar form as GCC compiles Eigen's squaredNorm there (dx^2 + dy^2
+    // rounded twice, then dz^2 fused in) and (A.r + B.r) + skin squared; written with the
+    // rounding-mode forms of the add and multiply, which GCC does not fuse into FMAs as it would
+    // the plain ones.
     const auto lane_pairs = [&](std::uint32_t k, std::uint32_t a, std::uint32_t b,
-                                const std::vector<std::uint32_t>& near_a,
-                                const std::vector<std::uint32_t>& near_b,
+                                std::uint64_t bits_a, std::uint64_t near_bits_b,
                                 std::vector<MemberPair>& pairs, std::vector<BodyContactKey>& keys) {
+        const std::uint32_t a0 = element_begin_[a];
         const std::uint32_t b0 = element_begin_[b];
         const std::uint32_t nb_e = element_begin_[b + 1] - b0;
-        std::uint64_t near_bits = 0;
-        for (const std::uint32_t eb : near_b) {
-            near_bits |= std::uint64_t{1} << (eb - b0);
-        }
-        const double* cx = member_cols_.data() + b0;
-        const double* cy = cx + n_members_all;
-        const double* cz = cy + n_members_all;
-        const double* cr = cz + n_members_all;
+        const Columns c = columns(b0);
         constexpr int mode = _MM_FROUND_CUR_DIRECTION;
         constexpr __mmask8 all = 0xff; // (the maskz forms: GCC 12's unmasked ones warn)
         const __m512d skin_v = _mm512_set1_pd(skin);
-        for (const std::uint32_t ea : near_a) {
+        for (; bits_a != 0; bits_a &= bits_a - 1) {
+            const std::uint32_t ea = a0 + static_cast<std::uint32_t>(std::countr_zero(bits_a));
             const MemberSphere& A = member_c_[ea];
             const __m512d ax = _mm512_set1_pd(A.x);
             const __m512d ay = _mm512_set1_pd(A.y);
@@ -473,30 +505,29 @@ void System::build_member_pairs() {
                 const auto lanes_in =
                     static_cast<__mmask8>(nb_e - j >= 8 ? 0xffU : (1U << (nb_e - j)) - 1U);
                 const __m512d dx = _mm512_maskz_sub_round_pd(
-                    all, ax, _mm512_maskz_loadu_pd(lanes_in, cx + j), mode);
+                    all, ax, _mm512_maskz_loadu_pd(lanes_in, c.x + j), mode);
                 const __m512d dy = _mm512_maskz_sub_round_pd(
-                    all, ay, _mm512_maskz_loadu_pd(lanes_in, cy + j), mode);
+                    all, ay, _mm512_maskz_loadu_pd(lanes_in, c.y + j), mode);
                 const __m512d dz = _mm512_maskz_sub_round_pd(
-                    all, az, _mm512_maskz_loadu_pd(lanes_in, cz + j), mode);
+                    all, az, _mm512_maskz_loadu_pd(lanes_in, c.z + j), mode);
                 const __m512d xy =
                     _mm512_maskz_add_round_pd(all, _mm512_maskz_mul_round_pd(all, dx, dx, mode),
                                               _mm512_maskz_mul_round_pd(all, dy, dy, mode), mode);
                 const __m512d d2 = _mm512_fmadd_pd(dz, dz, xy);
                 const __m512d reach = _mm512_maskz_add_round_pd(
                     all,
-                    _mm512_maskz_add_round_pd(all, ar, _mm512_maskz_loadu_pd(lanes_in, cr + j),
+                    _mm512_maskz_add_round_pd(all, ar, _mm512_maskz_loadu_pd(lanes_in, c.r + j),
                                               mode),
                     skin_v, mode);
                 const __mmask8 in = _mm512_mask_cmp_pd_mask(
                     lanes_in, d2, _mm512_maskz_mul_round_pd(all, reach, reach, mode), _CMP_LT_OQ);
                 hits |= static_cast<std::uint64_t>(in) << j;
             }
-            for (hits &= near_bits; hits != 0; hits &= hits - 1) {
+            for (hits &= near_bits_b; hits != 0; hits &= hits - 1) {
                 const auto j = static_cast<std::uint32_t>(std::countr_zero(hits));
                 const std::uint32_t eb = b0 + j;
                 pairs.push_back({k, a, b, ea, eb});
-                keys.push_back({p_.id[a], p_.id[b],
-                                static_cast<std::int32_t>(ea - element_begin_[a]),
+                keys.push_back({p_.id[a], p_.id[b], static_cast<std::int32_t>(ea - a0),
                                 static_cast<std::int32_t>(j)});
             }
         }
@@ -536,17 +567,21 @@ void System::build_member_pairs() {
             const std::uint32_t na = element_begin_[a + 1] - element_begin_[a];
             const std::uint32_t nb_e = element_begin_[b + 1] - element_begin_[b];
             if (na * nb_e > 2 * (na + nb_e)) { // the pre-selection pays (not for dimers: 4 vs 8)
+#if defined(__AVX512F__)
+                if (lanes && na <= 64 && nb_e <= 64) { // the same, in lanes
+                    const std::uint64_t bits_a = near_bits(a, b);
+                    const std::uint64_t bits_b = bits_a != 0 ? near_bits(b, a) : 0;
+                    if (bits_b != 0) {
+                        lane_pairs(k, a, b, bits_a, bits_b, pairs, keys);
+                    }
+                    return;
+                }
+#endif
                 near_members(a, b, near_a);
                 if (near_a.empty()) {
                     return;
                 }
                 near_members(b, a, near_b);
-#if defined(__AVX512F__)
-                if (lanes && nb_e <= 64 && !near_b.empty()) {
-                    lane_pairs(k, a, b, near_a, near_b, pairs, keys);
-                    return;
-                }
-#endif
             } else {
                 near_a.resize(na);
                 std::iota(near_a.begin(), near_a.end(), element_begin_[a]);
