@@ -446,6 +446,10 @@ void System::build_member_pairs() {
         const double* x = member_cols_.data() + e0;
         return Columns{x, x + n_members_all, x + 2 * n_members_all, x + 3 * n_members_all};
     };
+    // The lanes in use of a group of eight from member j of n on (all but past the end).
+    const auto group_mask = [](std::uint32_t n, std::uint32_t j) {
+        return static_cast<__mmask8>(n - j >= 8 ? 0xffU : (1U << (n - j)) - 1U);
+    };
     // Bit j set when member j of body i can reach body `other` (near_members' test, below; its
     // margin of 1e-9 of the reach keeps it conservative whatever the rounding), for a body of at
     // most 64 members.
@@ -460,8 +464,7 @@ void System::build_member_pairs() {
         const __m512d widen = _mm512_set1_pd(1.0 + 1e-9);
         std::uint64_t bits = 0;
         for (std::uint32_t j = 0; j < n_i; j += 8) {
-            const auto lanes_in =
-                static_cast<__mmask8>(n_i - j >= 8 ? 0xffU : (1U << (n_i - j)) - 1U);
+            const __mmask8 lanes_in = group_mask(n_i, j);
             const __m512d dx = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes_in, c.x + j), ox);
             const __m512d dy = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes_in, c.y + j), oy);
             const __m512d dz = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes_in, c.z + j), oz);
@@ -502,8 +505,7 @@ void System::build_member_pairs() {
             const __m512d ar = _mm512_set1_pd(A.r);
             std::uint64_t hits = 0;
             for (std::uint32_t j = 0; j < nb_e; j += 8) {
-                const auto lanes_in =
-                    static_cast<__mmask8>(nb_e - j >= 8 ? 0xffU : (1U << (nb_e - j)) - 1U);
+                const __mmask8 lanes_in = group_mask(nb_e, j);
                 const __m512d dx = _mm512_maskz_sub_round_pd(
                     all, ax, _mm512_maskz_loadu_pd(lanes_in, c.x + j), mode);
                 const __m512d dy = _mm512_maskz_sub_round_pd(
