@@ -1084,6 +1084,94 @@ constexpr double kOrderRoundOff = 1e-12;
 /// The same for libccd's EPA, which converges to ~1e-10 of the size (see below).
 constexpr double kEpaOrder = 1e-9;
 
+TEST(Polyhedra, PolyhedronOnAPlaneAveragesEveryVertexInTheBand) {
+    // The contact point of a polyhedron on a plane wall (docs/theory/contact.md, "Polyhedra"):
+    // the average of its vertices weighted by w = 1 - (overlap - depth) / (0.02 overlap) where
+    // w > 0, moved half the overlap out. body_contact.cpp finds the vertices below that band from
+    // their body-frame heights before it evaluates the others; here every vertex is evaluated,
+    // for faces and edges lying almost flat (tilts that put vertices at every weight in the band)
+    // and for random poses, on a floor and on a tilted plane far from the origin.
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const std::vector<WallShape> walls{
+        PlaneWall{Vec3(0.0, 0.0, -1e-3), Vec3::UnitZ()},
+        PlaneWall{Vec3(3.0, -2.0, 5.0), Vec3(0.3, -0.5, 0.8).normalized()}};
+    int weighted = 0; // contacts with a vertex of weight in (0, 0.5): near the band's edge
+    int cases = 0;
+    for (const char* name : {"cube", "plate_10x9x2", "icosahedron", "cylinder_16", "pyramid"}) {
+        const geometry::ShapeTemplate t = shape(name);
+        const auto& hull = std::get<geometry::ConvexPolyhedron>(t.shape);
+        const geometry::PolyhedronFeatures f = geometry::polyhedron_features(hull);
+        const double r = t.bounding_radius();
+        for (const WallShape& ws : walls) {
+            const auto& plane = std::get<PlaneWall>(ws);
+            for (int k = 0; k < 60; ++k) {
+                // The deepest vertex 1e-4 .. 1e-2 of r below the plane; a face (k even) or an
+                // edge (k odd) of the body turned towards the wall, then tilted so that the
+                // heights of its vertices differ by up to about two bands, or (every fifth) a
+                // random pose.
+                const double overlap = r * std::pow(10.0, -4.0 + std::abs(u(rng)) * 2.0);
+                Quat q;
+                if (k % 5 == 4) {
+                    q = Quat(
+                        Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()));
+                } else {
+                    const std::size_t fi = static_cast<std::size_t>(k) % f.face_normals.size();
+                    Vec3 down = f.face_normals[fi];
+                    if (k % 2 == 1) { // between two faces' normals: an edge's
+                        const std::size_t e = static_cast<std::size_t>(k) % f.edges.size();
+                        down = (f.face_normals[static_cast<std::size_t>(f.edges[e][2])] +
+                                f.face_normals[static_cast<std::size_t>(f.edges[e][3])])
+                                   .normalized();
+                    }
+                    // Body-frame `down` onto the world's -n, then a small tilt.
+                    const Vec3 to = -plane.normal;
+                    const Vec3 axis = down.cross(to);
+                    const double angle = std::atan2(axis.norm(), down.dot(to));
+                    const Quat onto(Eigen::AngleAxisd(angle, axis.norm() > 1e-9
+                                                                 ? Vec3(axis.normalized())
+                                                                 : Vec3(down.unitOrthogonal())));
+                    const Quat tilt(Eigen::AngleAxisd(0.04 * overlap / r * std::abs(u(rng)),
+                                                      Vec3(u(rng), u(rng), u(rng)).normalized()));
+                    q = tilt * onto;
+                }
+                const geometry::PosedPolyhedron at_origin{&f, Vec3::Zero(), q};
+                const Vec3 deepest = at_origin.support(-plane.normal);
+                const Vec3 x = plane.point - deepest - overlap * plane.normal;
+                std::vector<Element> e;
+                append_elements(&t, &f, x, q, r, e);
+                const ElementContact c = element_wall_contact(e[0], ws);
+                ASSERT_TRUE(c.touching) << name << " " << k;
+                // Every vertex by the rule.
+                const Mat3 rot = q.toRotationMatrix();
+                const double band = 0.02 * c.overlap;
+                Vec3 sum = Vec3::Zero();
+                double wsum = 0.0;
+                bool edge_weight = false;
+                for (const Vec3& v : f.vertices) {
+                    const Vec3 xv = x + rot * v;
+                    const double w =
+                        1.0 - (c.overlap + (xv - plane.point).dot(plane.normal)) / band;
+                    if (w > 0.0) {
+                        sum += w * xv;
+                        wsum += w;
+                        edge_weight = edge_weight || w < 0.5;
+                    }
+                }
+                const Vec3 expected = sum / wsum + 0.5 * c.overlap * plane.normal;
+                EXPECT_LT((c.point - expected).norm(), 1e-12 * (r + x.norm()))
+                    << name << " pose " << k << " overlap " << c.overlap;
+                EXPECT_NEAR(c.overlap, overlap, 1e-12 * (r + x.norm())) << name << " " << k;
+                weighted += edge_weight ? 1 : 0;
+                ++cases;
+            }
+        }
+    }
+    // The poses put vertices near the band's edge in many of the cases (the filter's margin is
+    // what they test).
+    EXPECT_GT(weighted, cases / 4);
+}
+
 TEST(Polyhedra, CubeContactDoesNotDependOnTheVertexOrder) {
     // The cube's inertia is isotropic, so its principal frame was whatever the eigen-solver made
     // of the round-off, which follows the order of the hull's vertices and faces (validation 31
