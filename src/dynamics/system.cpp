@@ -353,7 +353,7 @@ void System::carry_entry_caches() {
     const auto& nb = nl_.partners();
     const auto& owner = nl_.owners();
     if (!has_bodies_ || sep_dirs_.size() != nb.size() || sep_proofs_.size() != nb.size() ||
-        apart_below_.size() != nb.size() || plane_memos_.size() < nb.size() ||
+        apart_below_.size() != nb.size() || plane_memos_.size() != nb.size() ||
         travel_.size() != p_.size()) {
         return;
     }
@@ -405,9 +405,7 @@ void System::index_bodies() {
     reset_to(sep_proofs_, nb.size(), SeparationProof{}); // nor a proof along one
     // A memory is checked against the pair's shapes and relative pose before it is read, so the
     // entries keep theirs (and their storage): a memory of another pair is refilled.
-    if (plane_memos_.size() < nb.size()) { // grown only: their storage is kept
-        plane_memos_.resize(nb.size());
-    }
+    plane_memos_.resize(nb.size());
     reset_to(apart_below_, nb.size(), -std::numeric_limits<double>::infinity());
     // The caches of the pairs that were in the list before the build (carry_entry_caches), each
     // to its pair's new entry, found by the particles' ids (the build may reorder the particles).
