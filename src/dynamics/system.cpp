@@ -353,31 +353,38 @@ void System::carry_entry_caches() {
     const auto& nb = nl_.partners();
     const auto& owner = nl_.owners();
     if (!has_bodies_ || sep_dirs_.size() != nb.size() || sep_proofs_.size() != nb.size() ||
-        apart_below_.size() != nb.size() || plane_memos_.size() != nb.size() ||
-        travel_.size() != p_.size()) {
+        apart_below_.size() != nb.size() || travel_.size() != p_.size()) {
         return;
     }
     // The bodies have moved since travel_ was last brought up to date (the posing of the last
     // step): the slack below counts that motion too.
     update_travel();
-    carried_.resize(body_entries_.size());
     for (const std::uint32_t k : body_entries_) {
-        if (!(sep_dirs_[k].squaredNorm() > 0.0) && !plane_memos_[k].valid) {
+        const bool memo = k < plane_memos_.size() && plane_memos_[k].valid;
+        if (!(sep_dirs_[k].squaredNorm() > 0.0) && !memo) {
             continue;
         }
+        if (n_carried_ == carried_.size()) {
+            carried_.emplace_back();
+        }
+        CarriedEntry& e = carried_[n_carried_++];
         const std::uint32_t i = owner[k];
         const std::uint32_t j = nb[k];
-        carried_[n_carried_++] = {std::min(p_.id[i], p_.id[j]), std::max(p_.id[i], p_.id[j]), k};
+        e.a = std::min(p_.id[i], p_.id[j]);
+        e.b = std::max(p_.id[i], p_.id[j]);
+        e.dir = sep_dirs_[k];
+        e.proof = sep_proofs_[k];
         // The bound holds while the travel since the build before plus the travel since this
         // one stays below apart_below_; rounded down by far more than the subtraction's error.
         const double before = travel_[i] + travel_[j];
         const double slack = apart_below_[k] - before;
-        apart_below_[k] = slack - 1e-15 * (std::abs(apart_below_[k]) + before);
+        e.slack = slack - 1e-15 * (std::abs(apart_below_[k]) + before);
+        if (memo) {
+            std::swap(e.memo, plane_memos_[k]); // the entry gets e's old storage
+        }
+        e.memo.valid = memo;
+        plane_memos_[k].valid = plane_memos_[k].valid && !memo;
     }
-    sep_dirs_.swap(sep_dirs_old_);
-    sep_proofs_.swap(sep_proofs_old_);
-    apart_below_.swap(slack_old_);
-    plane_memos_.swap(plane_memos_old_);
 }
 
 void System::index_bodies() {
@@ -412,16 +419,17 @@ void System::index_bodies() {
     if (n_carried_ > 0) {
         index_ids();
         for (std::size_t c = 0; c < n_carried_; ++c) {
-            const CarriedEntry& e = carried_[c];
+            CarriedEntry& e = carried_[c];
             const std::uint32_t k = entry_between(index_of_id(e.a), index_of_id(e.b));
             if (k == no_index) {
                 continue; // the pair left the list
             }
-            sep_dirs_[k] = sep_dirs_old_[e.k];
-            sep_proofs_[k] = sep_proofs_old_[e.k];
-            apart_below_[k] = slack_old_[e.k];
-            if (plane_memos_old_[e.k].valid) {
-                std::swap(plane_memos_[k], plane_memos_old_[e.k]);
+            sep_dirs_[k] = e.dir;
+            sep_proofs_[k] = e.proof;
+            apart_below_[k] = e.slack;
+            if (e.memo.valid) {
+                std::swap(e.memo, plane_memos_[k]);
+                e.memo.valid = false;
             }
         }
         n_carried_ = 0;

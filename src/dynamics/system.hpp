@@ -425,20 +425,18 @@ class System {
     // (carry_entry_caches before the build, index_bodies after it): the direction, its proof, the
     // near-miss bound as the slack it has left (apart_below_ less the two bodies' travel_, which
     // starts again at 0) and the pair's memory. Without them every pair near another took a full
-    // search at the step after each build. carried_[0 .. n_carried_): the pairs with a cache and
-    // their entries in the old list, whose arrays are kept in the *_old_ ones (swapped with the
-    // live ones, so neither is allocated again at every build).
+    // search at the step after each build. carried_[0 .. n_carried_) are this build's; the
+    // elements past them keep their memories' storage for the next.
     struct CarriedEntry {
         std::int64_t a = 0; // the particles' ids, a < b
         std::int64_t b = 0;
-        std::uint32_t k = 0; // the entry in the old list
+        Vec3 dir = Vec3::Zero();
+        SeparationProof proof;
+        double slack = 0.0; // m; -infinity: no bound
+        geometry::PlaneMemo memo;
     };
     std::vector<CarriedEntry> carried_;
     std::size_t n_carried_ = 0;
-    std::vector<Vec3> sep_dirs_old_;
-    std::vector<SeparationProof> sep_proofs_old_;
-    std::vector<double> slack_old_;
-    std::vector<geometry::PlaneMemo> plane_memos_old_;
     std::vector<std::uint32_t> id_index_; // particle index by id (index_ids), or no_index
     void carry_entry_caches();
     static constexpr std::uint32_t no_index = 0xffffffffU;
