@@ -255,7 +255,6 @@ void System::check_time_step() {
 }
 
 void System::rebuild_neighbours() {
-    carry_entry_caches();
     const std::vector<std::uint32_t> order = nl_.build(p_, spec_.sort_particles);
     index_partners();
     std::vector<std::vector<std::uint32_t>> old_candidates;
@@ -302,91 +301,6 @@ void System::carry_wall_histories(const std::vector<std::uint32_t>& order,
     wall_shear_.swap(wall_shear_spare_);
 }
 
-namespace {
-
-/// v as n copies of `value`; storage grown by a quarter more than asked, so that a list that
-/// grows by a few entries at each build is not moved to new memory every time.
-template <class T> void reset_to(std::vector<T>& v, std::size_t n, const T& value) {
-    if (v.capacity() < n) {
-        v.reserve(n + n / 4);
-    }
-    v.assign(n, value);
-}
-
-} // namespace
-
-void System::index_ids() {
-    std::int64_t max_id = 0;
-    for (const std::int64_t id : p_.id) {
-        max_id = std::max(max_id, id);
-    }
-    id_index_.assign(static_cast<std::size_t>(max_id) + 1, no_index);
-    for (std::size_t i = 0; i < p_.size(); ++i) {
-        id_index_[static_cast<std::size_t>(p_.id[i])] = static_cast<std::uint32_t>(i);
-    }
-}
-
-std::uint32_t System::index_of_id(std::int64_t id) const {
-    return id >= 0 && static_cast<std::size_t>(id) < id_index_.size()
-               ? id_index_[static_cast<std::size_t>(id)]
-               : no_index;
-}
-
-std::uint32_t System::entry_between(std::uint32_t i, std::uint32_t j) const {
-    if (i == no_index || j == no_index) {
-        return no_index;
-    }
-    const auto& offsets = nl_.offsets();
-    const auto& nb = nl_.partners();
-    for (const auto& [owner, partner] : {std::pair{i, j}, std::pair{j, i}}) {
-        for (std::uint32_t k = offsets[owner]; k < offsets[owner + 1]; ++k) {
-            if (nb[k] == partner) {
-                return k;
-            }
-        }
-    }
-    return no_index;
-}
-
-void System::carry_entry_caches() {
-    n_carried_ = 0;
-    const auto& nb = nl_.partners();
-    const auto& owner = nl_.owners();
-    if (!has_bodies_ || sep_dirs_.size() != nb.size() || sep_proofs_.size() != nb.size() ||
-        apart_below_.size() != nb.size() || travel_.size() != p_.size()) {
-        return;
-    }
-    // The bodies have moved since travel_ was last brought up to date (the posing of the last
-    // step): the slack below counts that motion too.
-    update_travel();
-    for (const std::uint32_t k : body_entries_) {
-        const bool memo = k < plane_memos_.size() && plane_memos_[k].valid;
-        if (!(sep_dirs_[k].squaredNorm() > 0.0) && !memo) {
-            continue;
-        }
-        if (n_carried_ == carried_.size()) {
-            carried_.emplace_back();
-        }
-        CarriedEntry& e = carried_[n_carried_++];
-        const std::uint32_t i = owner[k];
-        const std::uint32_t j = nb[k];
-        e.a = std::min(p_.id[i], p_.id[j]);
-        e.b = std::max(p_.id[i], p_.id[j]);
-        e.dir = sep_dirs_[k];
-        e.proof = sep_proofs_[k];
-        // The bound holds while the travel since the build before plus the travel since this
-        // one stays below apart_below_; rounded down by far more than the subtraction's error.
-        const double before = travel_[i] + travel_[j];
-        const double slack = apart_below_[k] - before;
-        e.slack = slack - 1e-15 * (std::abs(apart_below_[k]) + before);
-        if (memo) {
-            std::swap(e.memo, plane_memos_[k]); // the entry gets e's old storage
-        }
-        e.memo.valid = memo;
-        plane_memos_[k].valid = plane_memos_[k].valid && !memo;
-    }
-}
-
 void System::index_bodies() {
     bodies_.clear();
     body_entries_.clear();
@@ -408,32 +322,12 @@ void System::index_bodies() {
     }
     const auto& nb = nl_.partners();
     const auto& owner = nl_.owners();
-    reset_to(sep_dirs_, nb.size(), Vec3(Vec3::Zero()));  // the entries changed: no direction
-    reset_to(sep_proofs_, nb.size(), SeparationProof{}); // nor a proof along one
+    sep_dirs_.assign(nb.size(), Vec3::Zero());        // the entries changed: no cached direction
+    sep_proofs_.assign(nb.size(), SeparationProof{}); // nor a proof along one
     // A memory is checked against the pair's shapes and relative pose before it is read, so the
     // entries keep theirs (and their storage): a memory of another pair is refilled.
     plane_memos_.resize(nb.size());
-    reset_to(apart_below_, nb.size(), -std::numeric_limits<double>::infinity());
-    // The caches of the pairs that were in the list before the build (carry_entry_caches), each
-    // to its pair's new entry, found by the particles' ids (the build may reorder the particles).
-    if (n_carried_ > 0) {
-        index_ids();
-        for (std::size_t c = 0; c < n_carried_; ++c) {
-            CarriedEntry& e = carried_[c];
-            const std::uint32_t k = entry_between(index_of_id(e.a), index_of_id(e.b));
-            if (k == no_index) {
-                continue; // the pair left the list
-            }
-            sep_dirs_[k] = e.dir;
-            sep_proofs_[k] = e.proof;
-            apart_below_[k] = e.slack;
-            if (e.memo.valid) {
-                std::swap(e.memo, plane_memos_[k]);
-                e.memo.valid = false;
-            }
-        }
-        n_carried_ = 0;
-    }
+    apart_below_.assign(nb.size(), -std::numeric_limits<double>::infinity());
     travel_.assign(p_.size(), 0.0); // every bound read against it goes too
     std::fill(wall_apart_below_.begin(), wall_apart_below_.end(),
               -std::numeric_limits<double>::infinity());

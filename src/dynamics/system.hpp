@@ -421,31 +421,6 @@ class System {
         Quat qb = Quat::Identity();
     };
     std::vector<SeparationProof> sep_proofs_;
-    // The caches of the entries of two bodies, carried over a list build by their particles' ids
-    // (carry_entry_caches before the build, index_bodies after it): the direction, its proof, the
-    // near-miss bound as the slack it has left (apart_below_ less the two bodies' travel_, which
-    // starts again at 0) and the pair's memory. Without them every pair near another took a full
-    // search at the step after each build. carried_[0 .. n_carried_) are this build's; the
-    // elements past them keep their memories' storage for the next.
-    struct CarriedEntry {
-        std::int64_t a = 0; // the particles' ids, a < b
-        std::int64_t b = 0;
-        Vec3 dir = Vec3::Zero();
-        SeparationProof proof;
-        double slack = 0.0; // m; -infinity: no bound
-        geometry::PlaneMemo memo;
-    };
-    std::vector<CarriedEntry> carried_;
-    std::size_t n_carried_ = 0;
-    std::vector<std::uint32_t> id_index_; // particle index by id (index_ids), or no_index
-    void carry_entry_caches();
-    static constexpr std::uint32_t no_index = 0xffffffffU;
-    // id_index_ from the particles' ids.
-    void index_ids();
-    // The particle of id `id` (index_ids), or no_index.
-    [[nodiscard]] std::uint32_t index_of_id(std::int64_t id) const;
-    // The list entry of particles i and j (either as its owner), or no_index.
-    [[nodiscard]] std::uint32_t entry_between(std::uint32_t i, std::uint32_t j) const;
     // Near misses skipped for several steps (body_forces): travel_[i] bounds how far any point of
     // polyhedron body i has moved since the last list build (m; the centre's step plus the
     // bounding radius times the change of the rotation, |R - R0| <= 2 min |q -+ q0|, in 2-norms,
@@ -459,8 +434,6 @@ class System {
     std::vector<Vec3> travel_x_;
     std::vector<Quat> travel_q_;
     std::vector<double> apart_below_;
-    // travel_ (and travel_x_, travel_q_) brought up to the bodies' present pose.
-    void update_travel();
     // Per shape: the hull of a polyhedron posed in place by body_forces, or nullptr (scratch).
     std::vector<const geometry::ConvexPolyhedron*> pose_hulls_;
     // Per body-wall candidate (body_walls_): for a single polyhedron apart from a plane wall, the

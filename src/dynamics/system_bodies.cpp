@@ -269,21 +269,43 @@ void System::rekey_body_contacts() {
     if (body_contacts_.empty()) {
         return;
     }
-    constexpr std::uint32_t none = no_index;
-    index_ids();
+    constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
+    std::int64_t max_id = 0;
+    for (const std::int64_t id : p_.id) {
+        max_id = std::max(max_id, id);
+    }
+    std::vector<std::uint32_t> index(static_cast<std::size_t>(max_id) + 1, none);
+    for (std::size_t i = 0; i < p_.size(); ++i) {
+        index[static_cast<std::size_t>(p_.id[i])] = static_cast<std::uint32_t>(i);
+    }
+    const auto index_of = [&](std::int64_t id) {
+        return id >= 0 && id <= max_id ? index[static_cast<std::size_t>(id)] : none;
+    };
+    const auto& offsets = nl_.offsets();
+    const auto& nb = nl_.partners();
+    const auto entry_of = [&](std::uint32_t i, std::uint32_t j) {
+        for (std::uint32_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+            if (nb[k] == j) {
+                return k;
+            }
+        }
+        return none;
+    };
     const auto n_walls = static_cast<std::int64_t>(spec_.walls.size());
     std::vector<std::pair<ContactGroup, std::uint32_t>> order;
     order.reserve(body_contacts_.size());
     for (std::size_t r = 0; r < body_contacts_.size(); ++r) {
         const BodyContactKey& key = body_contacts_[r].key;
-        const std::uint32_t ia = index_of_id(key.a);
+        const std::uint32_t ia = index_of(key.a);
         if (ia == none) {
             continue;
         }
         const auto ea = static_cast<std::uint32_t>(key.ea);
         ContactGroup g{};
         if (key.b >= 0) {
-            const std::uint32_t k = entry_between(ia, index_of_id(key.b));
+            const std::uint32_t ib = index_of(key.b);
+            std::uint32_t k = ib == none ? none : entry_of(ia, ib);
+            k = k == none && ib != none ? entry_of(ib, ia) : k;
             if (k == none) {
                 continue;
             }
@@ -675,23 +697,6 @@ void System::build_member_pairs() {
     members_valid_ = true;
 }
 
-void System::update_travel() {
-    // Only polyhedra read it: travel_r_ is 0 for the other bodies.
-    if (travel_.size() != p_.size()) {
-        return;
-    }
-    for (const std::uint32_t i : bodies_) {
-        const Vec3 dx = p_.x[i] - travel_x_[i];
-        const double minus = (p_.q[i].coeffs() - travel_q_[i].coeffs()).squaredNorm();
-        const double plus = (p_.q[i].coeffs() + travel_q_[i].coeffs()).squaredNorm();
-        const double step =
-            (dx.norm() + 2.0 * travel_r_[i] * std::sqrt(std::min(minus, plus))) * (1.0 + 1e-9);
-        travel_[i] = (travel_[i] + step) * (1.0 + 1e-15); // >= the exact sum
-        travel_x_[i] = p_.x[i];
-        travel_q_[i] = p_.q[i];
-    }
-}
-
 void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
     // This evaluation's number; body_eval_ stays that of the last one until the end, so that
     // fold_member_contacts below still finds last step's member-pair records.
@@ -833,9 +838,21 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
     if (unexpected) {
         throw std::logic_error("body_forces: a particle that is not a clump has one element");
     }
-    // travel_ brought up to this pose, in a loop of its own over the bodies (inside the posing
-    // loop above its chain of operations waited on that loop's branches).
-    update_travel();
+    // travel_ brought up to this pose (system.hpp), in a loop of its own over the bodies (inside
+    // the posing loop above its chain of operations waited on that loop's branches). Only
+    // polyhedra read it: travel_r_ is 0 for the other bodies.
+    if (travel_.size() == p_.size()) {
+        for (const std::uint32_t i : bodies_) {
+            const Vec3 dx = p_.x[i] - travel_x_[i];
+            const double minus = (p_.q[i].coeffs() - travel_q_[i].coeffs()).squaredNorm();
+            const double plus = (p_.q[i].coeffs() + travel_q_[i].coeffs()).squaredNorm();
+            const double step =
+                (dx.norm() + 2.0 * travel_r_[i] * std::sqrt(std::min(minus, plus))) * (1.0 + 1e-9);
+            travel_[i] = (travel_[i] + step) * (1.0 + 1e-15); // >= the exact sum
+            travel_x_[i] = p_.x[i];
+            travel_q_[i] = p_.q[i];
+        }
+    }
     if (elements_.size() < member_c_.size()) {
         elements_.resize(member_c_.size());
     }

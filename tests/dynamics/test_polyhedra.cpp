@@ -530,53 +530,6 @@ TEST(Polyhedra, SeparationCacheChangesNoBit) {
                 contacts, with.separation_skips(), with.narrow_phase_counters().calls);
 }
 
-TEST(Polyhedra, CachesCarriedOverListBuildsChangeNoBit) {
-    // A lattice of cubes and icosahedra falling into a box of plane walls (the benchmark scene of
-    // bench/lattice_scene.hpp, smaller) rebuilds its list every hundred steps or so while many
-    // pairs are near misses: their cached directions, proofs, near-miss bounds (travel since the
-    // proof, less the bodies' travel up to the build) and memories are carried to the new
-    // entries. With the cache and without it: the same contacts at every step, the same bits.
-    const auto lattice = [] {
-        SceneSpec s;
-        s.materials.push_back({"pom", 5e7, 0.35, 1380, 0.5, 0.3, 0.0});
-        s.time_step = 5e-6;
-        s.shapes.push_back(shape("cube"));
-        s.shapes.push_back(shape("icosahedron"));
-        const double r = std::max(s.shapes[0].bounding_radius(), s.shapes[1].bounding_radius());
-        const double a = 2.0 * r * 1.02;
-        const Vec3 hi(7 * a + 1e-4, 7 * a + 1e-4, 7 * a + 1e-4);
-        for (int k = 0; k < 2; ++k) {
-            InsertSpec ins;
-            ins.kind = InsertSpec::Kind::lattice;
-            ins.count = k == 0 ? 196 : 147;
-            ins.shape = k;
-            ins.size.radius = s.shapes[static_cast<std::size_t>(k)].bounding_radius();
-            ins.spacing = a;
-            ins.velocity = Vec3(0, 0, -0.2);
-            ins.orientation.random = true;
-            ins.region = {Vec3(0, 0, k * 4 * a),
-                          Vec3(hi.x(), hi.y(), k == 0 ? 4 * a + 1e-4 : hi.z())};
-            s.inserts.push_back(ins);
-        }
-        for (int k = 0; k < 3; ++k) {
-            s.walls.push_back({"lo", PlaneWall{Vec3::Zero(), Vec3::Unit(k)}, 0});
-            s.walls.push_back({"hi", PlaneWall{hi, -Vec3::Unit(k)}, 0});
-        }
-        return s;
-    };
-    System with(lattice());
-    System without(lattice());
-    without.use_separation_cache(false);
-    long contacts = 0;
-    ASSERT_NO_FATAL_FAILURE(step_both(with, without, 4000, contacts));
-    EXPECT_GT(with.neighbour_builds(), 10);
-    EXPECT_GT(with.separation_skips(), 10000);
-    EXPECT_GT(contacts, 10000);
-    test::expect_same_bits(with.particles(), without.particles());
-    std::printf("%ld list builds, %ld contacts, %ld queries answered by a separating direction\n",
-                with.neighbour_builds(), contacts, with.separation_skips());
-}
-
 TEST(Polyhedra, OneAndTwoThreadsGiveTheSameBits) {
     // With two threads the narrow phase of pairs of single convex bodies (polyhedra,
     // superquadrics, and either against a sphere) runs ahead of the serial pass, in parallel;
