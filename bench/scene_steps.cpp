@@ -11,6 +11,15 @@
 // the polyhedron pairs' memory; KILN_SCENE_THREADS=N: N threads, default 1), KIND: sphere, sq08,
 // sq03 (superquadrics of e = 0.8, 0.3) or a shipped shape name (cube, icosahedron, cylinder_16,
 // cylinder_12, ...).
+//
+// KILN_AB=SWITCH: an A/B of one of System's switches (memo, separation and member_lanes keep the
+// bits; box_lanes and convex_blocks change them at round-off, so their two runs part) inside one
+// process, which a shared host's noise cannot tilt: two systems from the same start, the second
+// with the switch off from the start, step in alternate chunks of 50 steps after the warm-up;
+// prints the CPU time per step of each, their ratio (on / off) and whether the final positions
+// are the same bits (exit status 1 if not). Runs of one binary against another drift with the
+// host's load by 10-40 % within minutes; this ratio repeats to about 0.5 %. A change under test
+// can be given a switch of its own for the A/B and the switch removed after it.
 
 #include "geometry/polyhedron_contact.hpp"
 #include "geometry/superquadric.hpp"
@@ -52,6 +61,63 @@ kiln::dynamics::SceneSpec scene(const std::string& kind) {
         kiln::io::read_shape_file(kiln::io::find_shape_file(kind, kiln::io::default_shape_dirs())));
 }
 
+/// Turns switch `name` of `sys` on or off; false for an unknown name.
+bool set_switch(kiln::dynamics::System& sys, const std::string& name, bool on) {
+    if (name == "memo") {
+        sys.use_plane_memo(on);
+    } else if (name == "box_lanes") {
+        sys.use_box_lanes(on);
+    } else if (name == "member_lanes") {
+        sys.use_member_lanes(on);
+    } else if (name == "separation") {
+        sys.use_separation_cache(on);
+    } else if (name == "convex_blocks") {
+        sys.use_convex_blocks(on);
+    } else {
+        return false;
+    }
+    return true;
+}
+
+/// The KILN_AB mode (see the top of the file): `on` has run the warm-up with the switch on.
+int ab_switch(const kiln::dynamics::SceneSpec& spec, kiln::dynamics::System& on,
+              const std::string& name, int warmup, int steps) {
+    kiln::dynamics::System off(spec);
+    if (!set_switch(off, name, false) || !set_switch(on, name, true)) {
+        std::fprintf(stderr, "KILN_AB: unknown switch %s\n", name.c_str());
+        return 2;
+    }
+    // The warm-up of `off` with the switch off too: its state is the same bits if the switch
+    // keeps them (checked at the end).
+    for (int k = 0; k < warmup; ++k) {
+        off.step();
+    }
+    constexpr int chunk = 50;
+    double t_on = 0.0;
+    double t_off = 0.0;
+    for (int k = 0; k < steps; k += chunk) {
+        const int n = std::min(chunk, steps - k);
+        const double c0 = cpu_seconds();
+        for (int i = 0; i < n; ++i) {
+            on.step();
+        }
+        const double c1 = cpu_seconds();
+        for (int i = 0; i < n; ++i) {
+            off.step();
+        }
+        t_on += c1 - c0;
+        t_off += cpu_seconds() - c1;
+    }
+    bool same = on.particles().size() == off.particles().size();
+    for (std::size_t i = 0; same && i < on.particles().size(); ++i) {
+        same = on.particles().x[i] == off.particles().x[i];
+    }
+    std::printf("%s ab %s on_us_per_step %.2f off_us_per_step %.2f on_over_off %.4f same_bits %s\n",
+                spec.shapes.empty() ? "sphere" : spec.shapes[0].name.c_str(), name.c_str(),
+                1e6 * t_on / steps, 1e6 * t_off / steps, t_on / t_off, same ? "yes" : "no");
+    return same ? 0 : 1;
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -77,6 +143,9 @@ int main(int argc, char** argv) {
     // element_contact (from the same state as with them in lanes; other bits).
     const char* lanes_env = std::getenv("KILN_BOX_LANES");
     sys.use_box_lanes(lanes_env == nullptr || std::string(lanes_env) != "0");
+    if (const char* ab = std::getenv("KILN_AB"); ab != nullptr) {
+        return ab_switch(spec, sys, ab, warmup, steps);
+    }
     long contacts = 0;
     const double t0 = cpu_seconds();
     const double w0 = wall_seconds();
