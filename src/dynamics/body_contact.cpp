@@ -618,43 +618,16 @@ ElementContact polyhedron_superquadric(const Element& p, const Element& s, const
 /// vertex is where the gradient of the overlap acts (Danskin), so the normal force is conservative
 /// except within the band; the weighted average keeps a face at rest centred. `depth(x)` is the
 /// depth of a world point below the wall (m); the point is moved half the overlap back out.
-///
-/// `plane` (a plane wall's point, or nullptr): the vertices that lie deeper than the band below
-/// the deepest are found first from their heights in the body frame, which cost a third of a
-/// world position and no division; only the others are evaluated as above. On a plane the world
-/// depth of a vertex is the depth of the centre plus its body-frame height along R^T (-n), so a
-/// vertex whose height is below the highest by more than the band plus a tolerance (1e-12 of
-/// the body's and the plane point's sizes, far above the round-off of either form) has w < 0 and
-/// would add nothing: the sum keeps its terms and their order, and the same bits.
 template <class Depth>
-Vec3 wall_point(const geometry::PosedPolyhedron& p, double overlap, const Vec3& n, Depth depth,
-                const Vec3* plane = nullptr) {
+Vec3 wall_point(const geometry::PosedPolyhedron& p, double overlap, const Vec3& n, Depth depth) {
     const geometry::PolyhedronFeatures& f = *p.shape;
     const double band = kTieBand * overlap;
     Vec3 sum = Vec3::Zero();
     double wsum = 0.0;
     const Mat3 rot =
         p.q.toRotationMatrix(); // one matrix instead of a quaternion product per vertex
-    const std::size_t nv = f.vertices.size();
-    constexpr std::size_t kMaxFiltered = 64; // vertices of the shapes a filter pays for
-    double cut = std::numeric_limits<double>::infinity(); // lowest height still evaluated
-    double heights[kMaxFiltered];
-    const bool filter = plane != nullptr && nv <= kMaxFiltered;
-    if (filter) {
-        const Vec3 g = -(rot.transpose() * n); // into the wall, body frame
-        double top = -std::numeric_limits<double>::infinity();
-        for (std::size_t k = 0; k < nv; ++k) {
-            heights[k] = g.dot(f.vertices[k]);
-            top = std::max(top, heights[k]);
-        }
-        const double tol = 1e-12 * (f.radius + p.x.cwiseAbs().sum() + plane->cwiseAbs().sum());
-        cut = top - band - tol;
-    }
-    for (std::size_t k = 0; k < nv; ++k) {
-        if (filter && heights[k] < cut) {
-            continue; // below the band: w < 0
-        }
-        const Vec3 x = p.x + rot * f.vertices[k];
+    for (const Vec3& v : f.vertices) {
+        const Vec3 x = p.x + rot * v;
         const double w = 1.0 - (overlap - depth(x)) / band;
         if (w > 0.0) {
             sum += w * x;
@@ -683,9 +656,8 @@ ElementContact polyhedron_wall(const Element& a, const WallShape& w) {
         [&](const auto& s) {
             using S = std::decay_t<decltype(s)>;
             if constexpr (std::is_same_v<S, PlaneWall>) {
-                out.point = wall_point(
-                    p, out.overlap, out.normal,
-                    [&](const Vec3& x) { return -(x - s.point).dot(s.normal); }, &s.point);
+                out.point = wall_point(p, out.overlap, out.normal,
+                                       [&](const Vec3& x) { return -(x - s.point).dot(s.normal); });
             } else {
                 out.point = wall_point(p, out.overlap, out.normal, [&](const Vec3& x) {
                     Vec3 rp = x - s.axis_point;

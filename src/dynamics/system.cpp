@@ -475,7 +475,6 @@ void System::find_wall_candidates() {
     // Bodies: the same test with the bounding sphere, body by body (body_forces() loops so).
     body_wall_offsets_.assign(bodies_.size() + 1, 0);
     body_walls_.clear();
-    body_wall_owner_.clear();
     for (std::size_t b = 0; b < bodies_.size(); ++b) {
         const std::uint32_t i = bodies_[b];
         for (std::size_t w = 0; w < nw; ++w) {
@@ -484,7 +483,6 @@ void System::find_wall_candidates() {
                 spec_.walls[w].shape);
             if (wc.overlap > -nl_.skin()) {
                 body_walls_.push_back(static_cast<std::uint32_t>(w));
-                body_wall_owner_.push_back(i);
             }
         }
         body_wall_offsets_[b + 1] = static_cast<std::uint32_t>(body_walls_.size());

@@ -472,20 +472,6 @@ class System {
     // Walls within the skin of each body at the last list build: those of bodies_[b] are
     // body_walls_[body_wall_offsets_[b] .. body_wall_offsets_[b + 1]), in wall order.
     std::vector<std::uint32_t> body_wall_offsets_, body_walls_;
-    // Per candidate of body_walls_: the body's particle index (set with body_walls_).
-    std::vector<std::uint32_t> body_wall_owner_;
-    // The candidates of body_walls_ that the serial wall pass queries this step, in order
-    // (scratch of body_forces: those that reach their wall and are not skipped).
-    std::vector<std::uint32_t> wall_pass_;
-    // The plane walls for that pass: point and unit normal (world; zero for a cylinder wall),
-    // the point's 1-norm (m) for the margin.
-    struct WallPlane {
-        bool plane = false;
-        Vec3 p = Vec3::Zero();
-        Vec3 n = Vec3::Zero();
-        double size = 0.0;
-    };
-    std::vector<WallPlane> wall_planes_;
     // R(q) of each body (body -> world; particle index, unused for spheres): set from q at every
     // list rebuild and restart, carried by free_rotate between them (the same function of q).
     std::vector<Mat3> rot_;

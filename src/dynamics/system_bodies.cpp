@@ -2098,71 +2098,29 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
                     }
                 }
             }
-            // The candidates the serial pass takes, in order (body by body, wall by wall): with
-            // the queries found ahead, every one; else only those a query would not end at its
-            // first tests (a candidate left out has no contact and its query changes no state):
-            // the bounding sphere reaches into a plane wall (here with a margin far above the
-            // round-off of the two forms of that test: wall_query and clump_wall_query then run
-            // the exact one), and the travel bound of a polyhedron apart from it does not hold
-            // (the same comparison as wall_query's). One pass without branches over the
-            // candidates: about half of them fail the first test, in no pattern a branch
-            // predictor learns, and most of the rest the second.
-            const std::size_t n_shapes = spec_.walls.size();
-            wall_planes_.resize(n_shapes);
-            for (std::size_t w = 0; w < n_shapes; ++w) {
-                WallPlane& pl = wall_planes_[w];
-                const auto* plane = std::get_if<PlaneWall>(&spec_.walls[w].shape);
-                pl.plane = plane != nullptr;
-                pl.p = plane != nullptr ? plane->point : Vec3::Zero();
-                pl.n = plane != nullptr ? plane->normal : Vec3::Zero();
-                pl.size = pl.p.cwiseAbs().sum();
-            }
-            wall_pass_.resize(n_candidates);
-            std::size_t n_pass = 0;
-            if (walls_ahead) {
-                std::iota(wall_pass_.begin(), wall_pass_.end(), std::uint32_t{0});
-                n_pass = n_candidates;
-            } else {
-                const std::uint32_t* const owner = body_wall_owner_.data();
-                const std::uint32_t* const wall_of = body_walls_.data();
-                const WallPlane* const planes = wall_planes_.data();
-                const Vec3* const x = p_.x.data();
-                const double* const radius = p_.radius.data();
-                const double* const travel = travel_.data();
-                const double* const below = wall_apart_below_.data();
-                std::uint32_t* const pass = wall_pass_.data();
-                for (std::size_t c = 0; c < n_candidates; ++c) {
-                    const std::uint32_t a = owner[c];
-                    const WallPlane& pl = planes[wall_of[c]];
-                    const Vec3 d = x[a] - pl.p;
-                    const double gap = d.x() * pl.n.x() + d.y() * pl.n.y() + d.z() * pl.n.z();
-                    const double margin = 1e-12 * (radius[a] + x[a].cwiseAbs().sum() + pl.size);
-                    const bool reach = !pl.plane || radius[a] - gap > -margin;
-                    const bool skip = travel[a] < below[c];
-                    pass[n_pass] = static_cast<std::uint32_t>(c);
-                    n_pass += static_cast<std::size_t>(reach & !skip);
-                }
-            }
             AheadPair one_wall; // the serial pass's wall_query
-            for (std::size_t i = 0; i < n_pass; ++i) {
-                const std::uint32_t c = wall_pass_[i];
-                const std::uint32_t a = body_wall_owner_[c];
-                const std::uint32_t w = body_walls_[c];
-                if (walls_ahead && wall_ahead_[c].ready) {
-                    take_wall(wall_ahead_[c]);
-                    continue;
+            for (std::size_t bi = 0; bi < bodies_.size(); ++bi) {
+                const std::uint32_t a = bodies_[bi];
+                const bool convex = convex_body(a);
+                for (std::uint32_t c = body_wall_offsets_[bi]; c < body_wall_offsets_[bi + 1];
+                     ++c) {
+                    const std::uint32_t w = body_walls_[c];
+                    if (walls_ahead && wall_ahead_[c].ready) {
+                        take_wall(wall_ahead_[c]);
+                        continue;
+                    }
+                    if (convex) {
+                        wall_query(c, a, w, find_old, one_wall);
+                        take_wall(one_wall);
+                        continue;
+                    }
+                    if (walls_ahead && clump_wall_ready_[c] != 0) {
+                        take_clump_wall(a, w, clump_wall_ahead_[c]);
+                        continue;
+                    }
+                    clump_wall_query(a, w, wall_hits_, one_clump_wall_);
+                    take_clump_wall(a, w, one_clump_wall_);
                 }
-                if (convex_body(a)) {
-                    wall_query(c, a, w, find_old, one_wall);
-                    take_wall(one_wall);
-                    continue;
-                }
-                if (walls_ahead && clump_wall_ready_[c] != 0) {
-                    take_clump_wall(a, w, clump_wall_ahead_[c]);
-                    continue;
-                }
-                clump_wall_query(a, w, wall_hits_, one_clump_wall_);
-                take_clump_wall(a, w, one_clump_wall_);
             }
             flush();
 
