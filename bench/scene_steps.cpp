@@ -81,8 +81,8 @@ bool set_switch(kiln::dynamics::System& sys, const std::string& name, bool on) {
 }
 
 /// The KILN_AB mode (see the top of the file): `on` has run the warm-up with the switch on.
-int ab_switch(const kiln::dynamics::SceneSpec& spec, kiln::dynamics::System& on,
-              const std::string& name, int warmup, int steps) {
+int ab_switch(const std::string& kind, const kiln::dynamics::SceneSpec& spec,
+              kiln::dynamics::System& on, const std::string& name, int warmup, int steps) {
     kiln::dynamics::System off(spec);
     if (!set_switch(off, name, false) || !set_switch(on, name, true)) {
         std::fprintf(stderr, "KILN_AB: unknown switch %s\n", name.c_str());
@@ -114,8 +114,8 @@ int ab_switch(const kiln::dynamics::SceneSpec& spec, kiln::dynamics::System& on,
         same = on.particles().x[i] == off.particles().x[i];
     }
     std::printf("%s ab %s on_us_per_step %.2f off_us_per_step %.2f on_over_off %.4f same_bits %s\n",
-                spec.shapes.empty() ? "sphere" : spec.shapes[0].name.c_str(), name.c_str(),
-                1e6 * t_on / steps, 1e6 * t_off / steps, t_on / t_off, same ? "yes" : "no");
+                kind.c_str(), name.c_str(), 1e6 * t_on / steps, 1e6 * t_off / steps, t_on / t_off,
+                same ? "yes" : "no");
     return same ? 0 : 1;
 }
 
@@ -145,7 +145,7 @@ int main(int argc, char** argv) {
     const char* lanes_env = std::getenv("KILN_BOX_LANES");
     sys.use_box_lanes(lanes_env == nullptr || std::string(lanes_env) != "0");
     if (const char* ab = std::getenv("KILN_AB"); ab != nullptr) {
-        return ab_switch(spec, sys, ab, warmup, steps);
+        return ab_switch(kind, spec, sys, ab, warmup, steps);
     }
     long contacts = 0;
     const double t0 = cpu_seconds();

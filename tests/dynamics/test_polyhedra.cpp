@@ -1087,10 +1087,10 @@ constexpr double kEpaOrder = 1e-9;
 TEST(Polyhedra, PolyhedronOnAPlaneAveragesEveryVertexInTheBand) {
     // The contact point of a polyhedron on a plane wall (docs/theory/contact.md, "Polyhedra"):
     // the average of its vertices weighted by w = 1 - (overlap - depth) / (0.02 overlap) where
-    // w > 0, moved half the overlap out. body_contact.cpp finds the vertices below that band from
-    // their body-frame heights before it evaluates the others; here every vertex is evaluated,
-    // for faces and edges lying almost flat (tilts that put vertices at every weight in the band)
-    // and for random poses, on a floor and on a tilted plane far from the origin.
+    // w > 0, moved half the overlap out. Every vertex is evaluated here by that rule, for faces
+    // and edges lying almost flat (tilts that put vertices at every weight in the band) and for
+    // random poses, on a floor and on a tilted plane far from the origin: a route that drops or
+    // misweighs a vertex of the band (as a filter of the vertices might) moves the point.
     std::mt19937 rng(7);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     const std::vector<WallShape> walls{
@@ -1167,8 +1167,8 @@ TEST(Polyhedra, PolyhedronOnAPlaneAveragesEveryVertexInTheBand) {
             }
         }
     }
-    // The poses put vertices near the band's edge in many of the cases (the filter's margin is
-    // what they test).
+    // The poses put vertices near the band's edge in many of the cases (where a vertex dropped
+    // wrongly would show).
     EXPECT_GT(weighted, cases / 4);
 }
 
