@@ -72,6 +72,8 @@ bool set_switch(kiln::dynamics::System& sys, const std::string& name, bool on) {
         sys.use_member_lanes(on);
     } else if (name == "separation") {
         sys.use_separation_cache(on);
+    } else if (name == "box_filter") {
+        sys.use_box_filter(on);
     } else if (name == "convex_blocks") {
         sys.use_convex_blocks(on);
     } else {
@@ -172,5 +174,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "element pairs queried %ld, proved apart by a cached direction %ld\n",
                  sys.narrow_phase_counters().calls, sys.separation_skips());
     std::fprintf(stderr, "box pairs in lanes %ld\n", sys.box_lane_pairs());
+    std::fprintf(stderr,
+                 "member builds %ld (list builds %ld), entries left out by the box test %ld\n",
+                 sys.member_builds(), sys.neighbour_builds(), sys.box_filter_drops());
     return 0;
 }

@@ -92,9 +92,11 @@ System::System(const SceneSpec& spec)
     }
     poly_features_.resize(spec_.shapes.size());
     member_columns_.resize(spec_.shapes.size());
+    body_boxes_.assign(spec_.shapes.size(), {Vec3::Zero(), Vec3::Constant(-1.0)});
     for (std::size_t k = 0; k < spec_.shapes.size(); ++k) {
         if (const auto* ph = std::get_if<geometry::ConvexPolyhedron>(&spec_.shapes[k].shape)) {
             poly_features_[k] = geometry::polyhedron_features(*ph);
+            body_boxes_[k] = geometry::body_box(poly_features_[k].vertices);
         }
         if (const auto* c = std::get_if<geometry::Clump>(&spec_.shapes[k].shape)) {
             member_columns_[k] = member_columns(c->spheres.data(), c->spheres.size());

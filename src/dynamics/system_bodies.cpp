@@ -8,6 +8,7 @@
 #include "geometry/rotation.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <exception>
@@ -535,75 +536,103 @@ void System::build_member_pairs() {
         }
     };
 #endif
+    // The box test (use_box_filter): an entry of two polyhedra whose boxes along their body axes
+    // are more than a skin apart cannot touch while neither body moves half a skin (travel_, which
+    // bounds the motion of every point of a polyhedron, rotation included): it is left out, its
+    // bodies marked, and body_forces rebuilds the member pairs before either has moved that far.
+    // Such entries are near misses of bounding spheres: of a flat plate in a settled pile, about
+    // two in three list entries. travel_ must be current (it is, after index_bodies, at every
+    // posing).
+    const bool box_test = box_filter_ && travel_.size() == p_.size();
+    box_marks_.assign(box_test ? p_.size() : 0, 0);
+    const auto boxes_apart = [&](std::uint32_t a, std::uint32_t b) {
+        if (p_.shape[a] < 0 || p_.shape[b] < 0) {
+            return false;
+        }
+        const geometry::BodyBox& ba = body_boxes_[static_cast<std::size_t>(p_.shape[a])];
+        const geometry::BodyBox& bb = body_boxes_[static_cast<std::size_t>(p_.shape[b])];
+        if (ba.half.x() < 0.0 || bb.half.x() < 0.0) {
+            return false;
+        }
+        return geometry::boxes_apart(p_.x[a] + rot_[a] * ba.centre, rot_[a], ba.half,
+                                     p_.x[b] + rot_[b] * bb.centre, rot_[b], bb.half, skin);
+    };
     // The member pairs of list entry k, appended to `pairs` and `keys` (near_a, near_b: scratch).
-    const auto entry_pairs =
-        [&](std::uint32_t k, std::vector<MemberPair>& pairs, std::vector<BodyContactKey>& keys,
-            std::vector<std::uint32_t>& near_a, std::vector<std::uint32_t>& near_b) {
-            std::uint32_t a = owner[k];
-            std::uint32_t b = nb[k];
-            if (p_.id[a] > p_.id[b]) {
-                std::swap(a, b);
-            }
-            if (!all_spheres(a) || !all_spheres(b)) {
-                pairs.push_back({k, a, b, no_element, no_element});
-                keys.push_back({p_.id[a], p_.id[b], -1, -1});
+    const auto entry_pairs = [&](std::uint32_t k, std::vector<MemberPair>& pairs,
+                                 std::vector<BodyContactKey>& keys,
+                                 std::vector<std::uint32_t>& near_a,
+                                 std::vector<std::uint32_t>& near_b) {
+        std::uint32_t a = owner[k];
+        std::uint32_t b = nb[k];
+        if (p_.id[a] > p_.id[b]) {
+            std::swap(a, b);
+        }
+        if (!all_spheres(a) || !all_spheres(b)) {
+            if (box_test && boxes_apart(a, b)) {
+                std::atomic_ref<std::uint8_t>(box_marks_[a]).store(1, std::memory_order_relaxed);
+                std::atomic_ref<std::uint8_t>(box_marks_[b]).store(1, std::memory_order_relaxed);
+                std::atomic_ref<long>(box_filter_drops_).fetch_add(1, std::memory_order_relaxed);
                 return;
             }
-            // Members of each side that can reach the other body at all: a member pair within the
-            // skin has |A - x_b| < r_A + skin + R_b (R_b: b's bounding radius, which covers every
-            // member's sphere), so members beyond that (widened by 1e-9 against round-off) pair
-            // with nothing. The pairs are those of the full double loop, in its order.
-            const auto near_members = [&](std::uint32_t i, std::uint32_t other,
-                                          std::vector<std::uint32_t>& out) {
-                out.clear();
-                const Vec3& xo = p_.x[other];
-                const double ro = p_.radius[other] + skin;
-                for (std::uint32_t e = element_begin_[i]; e < element_begin_[i + 1]; ++e) {
-                    const MemberSphere& m = member_c_[e];
-                    const double reach = (m.r + ro) * (1.0 + 1e-9);
-                    if ((Vec3(m.x, m.y, m.z) - xo).squaredNorm() < reach * reach) {
-                        out.push_back(e);
-                    }
-                }
-            };
-            const std::uint32_t na = element_begin_[a + 1] - element_begin_[a];
-            const std::uint32_t nb_e = element_begin_[b + 1] - element_begin_[b];
-            if (na * nb_e > 2 * (na + nb_e)) { // the pre-selection pays (not for dimers: 4 vs 8)
-#if defined(__AVX512F__)
-                if (lanes && na <= 64 && nb_e <= 64) { // the same, in lanes
-                    const std::uint64_t bits_a = near_bits(a, b);
-                    const std::uint64_t bits_b = bits_a != 0 ? near_bits(b, a) : 0;
-                    if (bits_b != 0) {
-                        lane_pairs(k, a, b, bits_a, bits_b, pairs, keys);
-                    }
-                    return;
-                }
-#endif
-                near_members(a, b, near_a);
-                if (near_a.empty()) {
-                    return;
-                }
-                near_members(b, a, near_b);
-            } else {
-                near_a.resize(na);
-                std::iota(near_a.begin(), near_a.end(), element_begin_[a]);
-                near_b.resize(nb_e);
-                std::iota(near_b.begin(), near_b.end(), element_begin_[b]);
-            }
-            for (const std::uint32_t ea : near_a) {
-                for (const std::uint32_t eb : near_b) {
-                    const MemberSphere& A = member_c_[ea];
-                    const MemberSphere& B = member_c_[eb];
-                    const double reach = A.r + B.r + skin;
-                    if ((Vec3(A.x, A.y, A.z) - Vec3(B.x, B.y, B.z)).squaredNorm() < reach * reach) {
-                        pairs.push_back({k, a, b, ea, eb});
-                        keys.push_back({p_.id[a], p_.id[b],
-                                        static_cast<std::int32_t>(ea - element_begin_[a]),
-                                        static_cast<std::int32_t>(eb - element_begin_[b])});
-                    }
+            pairs.push_back({k, a, b, no_element, no_element});
+            keys.push_back({p_.id[a], p_.id[b], -1, -1});
+            return;
+        }
+        // Members of each side that can reach the other body at all: a member pair within the
+        // skin has |A - x_b| < r_A + skin + R_b (R_b: b's bounding radius, which covers every
+        // member's sphere), so members beyond that (widened by 1e-9 against round-off) pair
+        // with nothing. The pairs are those of the full double loop, in its order.
+        const auto near_members = [&](std::uint32_t i, std::uint32_t other,
+                                      std::vector<std::uint32_t>& out) {
+            out.clear();
+            const Vec3& xo = p_.x[other];
+            const double ro = p_.radius[other] + skin;
+            for (std::uint32_t e = element_begin_[i]; e < element_begin_[i + 1]; ++e) {
+                const MemberSphere& m = member_c_[e];
+                const double reach = (m.r + ro) * (1.0 + 1e-9);
+                if ((Vec3(m.x, m.y, m.z) - xo).squaredNorm() < reach * reach) {
+                    out.push_back(e);
                 }
             }
         };
+        const std::uint32_t na = element_begin_[a + 1] - element_begin_[a];
+        const std::uint32_t nb_e = element_begin_[b + 1] - element_begin_[b];
+        if (na * nb_e > 2 * (na + nb_e)) { // the pre-selection pays (not for dimers: 4 vs 8)
+#if defined(__AVX512F__)
+            if (lanes && na <= 64 && nb_e <= 64) { // the same, in lanes
+                const std::uint64_t bits_a = near_bits(a, b);
+                const std::uint64_t bits_b = bits_a != 0 ? near_bits(b, a) : 0;
+                if (bits_b != 0) {
+                    lane_pairs(k, a, b, bits_a, bits_b, pairs, keys);
+                }
+                return;
+            }
+#endif
+            near_members(a, b, near_a);
+            if (near_a.empty()) {
+                return;
+            }
+            near_members(b, a, near_b);
+        } else {
+            near_a.resize(na);
+            std::iota(near_a.begin(), near_a.end(), element_begin_[a]);
+            near_b.resize(nb_e);
+            std::iota(near_b.begin(), near_b.end(), element_begin_[b]);
+        }
+        for (const std::uint32_t ea : near_a) {
+            for (const std::uint32_t eb : near_b) {
+                const MemberSphere& A = member_c_[ea];
+                const MemberSphere& B = member_c_[eb];
+                const double reach = A.r + B.r + skin;
+                if ((Vec3(A.x, A.y, A.z) - Vec3(B.x, B.y, B.z)).squaredNorm() < reach * reach) {
+                    pairs.push_back({k, a, b, ea, eb});
+                    keys.push_back({p_.id[a], p_.id[b],
+                                    static_cast<std::int32_t>(ea - element_begin_[a]),
+                                    static_cast<std::int32_t>(eb - element_begin_[b])});
+                }
+            }
+        }
+    };
     // With several threads, ranges of entries in parallel, each into its own lists, joined in
     // range order: the pairs of the serial loop, in its order (whatever the ranges).
     const std::size_t n_entries = body_entries_.size();
@@ -660,6 +689,16 @@ void System::build_member_pairs() {
         }
     }
     member_pairs_built_ += static_cast<long>(member_pairs_.size());
+    ++member_builds_;
+    // The travel at which a body of an entry left out must have the member pairs rebuilt.
+    box_limits_live_ = false;
+    box_limit_.assign(p_.size(), std::numeric_limits<double>::infinity());
+    for (std::size_t i = 0; i < box_marks_.size(); ++i) {
+        if (box_marks_[i] != 0) {
+            box_limit_[i] = travel_[i] + 0.5 * skin;
+            box_limits_live_ = true;
+        }
+    }
     // The poses of this build, for body_forces' rebuild test: every element centre, and per
     // particle its centre, R and farthest element centre.
     member_x_build_.resize(member_c_.size());
@@ -841,7 +880,9 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
     // travel_ brought up to this pose (system.hpp), in a loop of its own over the bodies (inside
     // the posing loop above its chain of operations waited on that loop's branches). Only
     // polyhedra read it: travel_r_ is 0 for the other bodies.
+    bool box_reached = false; // a body of an entry left out by the box test may reach it
     if (travel_.size() == p_.size()) {
+        const bool limits = box_limits_live_ && box_limit_.size() == p_.size();
         for (const std::uint32_t i : bodies_) {
             const Vec3 dx = p_.x[i] - travel_x_[i];
             const double minus = (p_.q[i].coeffs() - travel_q_[i].coeffs()).squaredNorm();
@@ -849,6 +890,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             const double step =
                 (dx.norm() + 2.0 * travel_r_[i] * std::sqrt(std::min(minus, plus))) * (1.0 + 1e-9);
             travel_[i] = (travel_[i] + step) * (1.0 + 1e-15); // >= the exact sum
+            box_reached |= limits && travel_[i] >= box_limit_[i];
             travel_x_[i] = p_.x[i];
             travel_q_[i] = p_.q[i];
         }
@@ -1541,7 +1583,7 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
             // not every element (a pass over every element was a tenth of a 36-sphere clump
             // run), and answers as that pass does. With fewer, the pass is the cheaper.
             bool moved = !members_valid_ || member_x_build_.size() != member_c_.size() ||
-                         body_x_build_.size() != p_.size();
+                         body_x_build_.size() != p_.size() || box_reached;
             const double quarter = 0.25 * nl_.skin() * nl_.skin();
             // The displacements of elements [e0, e1): does one pass half the skin? (Without an
             // early exit: vector lanes.)

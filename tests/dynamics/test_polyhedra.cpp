@@ -758,6 +758,67 @@ TEST(Polyhedra, BoxLanesAgreeWithElementContact) {
                 compared, lanes, worst_point, worst_point_tol, worst_overlap);
 }
 
+TEST(Polyhedra, BoxFilterChangesNoBit) {
+    // The member build leaves out entries of two polyhedra whose boxes along their body axes are
+    // more than a skin apart, and builds again when a body of one has moved half a skin (turns
+    // included). Pours of boxes (cubes, cuboids, plates: a plate's box is a seventh of its
+    // bounding sphere) and of cubes and icosahedra among superquadrics and spheres, with the
+    // filter and without: the same contacts at every step, the same bits; entries were left out,
+    // and the bodies' turns and motion called member builds between list builds.
+    for (const bool boxes : {true, false}) {
+        const SceneSpec spec = boxes ? box_pour() : convex_pour();
+        System with(spec);
+        System without(spec);
+        without.use_box_filter(false);
+        const long drops_at_start = without.box_filter_drops(); // the constructor's forces
+        long contacts = 0;
+        ASSERT_NO_FATAL_FAILURE(step_both(with, without, boxes ? 20000 : 15000, contacts));
+        EXPECT_GT(contacts, 10000);
+        EXPECT_GT(with.box_filter_drops(), boxes ? 2000 : 500);
+        EXPECT_EQ(without.box_filter_drops(), drops_at_start);
+        if (boxes) { // (the pour of mixed shapes rebuilds its list often enough)
+            EXPECT_GT(with.member_builds(), with.neighbour_builds());
+        }
+        EXPECT_EQ(with.neighbour_builds(), without.neighbour_builds());
+        test::expect_same_bits(with.particles(), without.particles());
+        std::printf("%s: %ld contacts; %ld member builds (%ld without the filter), %ld entries "
+                    "left out\n",
+                    boxes ? "boxes" : "convex pour", contacts, with.member_builds(),
+                    without.member_builds(), with.box_filter_drops());
+    }
+}
+
+TEST(Polyhedra, SpinningPlateMeetsItsNeighbourBetweenListBuilds) {
+    // Two plates (10 x 9 x 2 mm) side by side, 1.5 mm between their faces: more than the skin
+    // (1.36 mm), so the box test leaves their entry out, though their bounding spheres overlap.
+    // The first spins about its short axis at 200 rad/s with its centre at rest, so the list is
+    // never rebuilt before they meet: only the member build called by its turn (travel_) can
+    // bring the pair back in time. They must meet at the same step as without the filter.
+    SceneSpec s = base_scene();
+    s.shapes.push_back(shape("plate_10x9x2"));
+    s.particles.push_back(body(0, Vec3::Zero(), Vec3::Zero(), Vec3(0, 0, 200)));
+    s.particles.push_back(body(0, Vec3(0.0115, 0, 0)));
+    System with(s);
+    System without(s);
+    without.use_box_filter(false);
+    long first = -1;
+    for (long k = 0; k < 4000; ++k) {
+        with.step();
+        without.step();
+        ASSERT_EQ(with.counters().particle_contacts, without.counters().particle_contacts) << k;
+        if (first < 0 && with.counters().particle_contacts > 0) {
+            first = k;
+            EXPECT_EQ(with.neighbour_builds(), 1); // the list was built once, at the start
+        }
+    }
+    EXPECT_GT(first, 0); // they met
+    EXPECT_GT(with.box_filter_drops(), 0);
+    EXPECT_GT(with.member_builds(), 1);
+    test::expect_same_bits(with.particles(), without.particles());
+    std::printf("first contact at step %ld; %ld member builds, %ld list builds\n", first,
+                with.member_builds(), with.neighbour_builds());
+}
+
 TEST(Polyhedra, SavedStateContinuesBitForBit) {
     SceneSpec s = base_scene();
     s.gravity = Vec3(0, 0, -9.81);
