@@ -98,6 +98,9 @@ System::System(const SceneSpec& spec)
             poly_features_[k] = geometry::polyhedron_features(*ph);
             body_boxes_[k] = geometry::body_box(poly_features_[k].vertices);
         }
+        if (const auto* sq = std::get_if<geometry::Superquadric>(&spec_.shapes[k].shape)) {
+            body_boxes_[k] = {Vec3::Zero(), sq->half_axes}; // |x_i| <= a_i on the surface
+        }
         if (const auto* c = std::get_if<geometry::Clump>(&spec_.shapes[k].shape)) {
             member_columns_[k] = member_columns(c->spheres.data(), c->spheres.size());
         }
@@ -339,6 +342,8 @@ void System::index_bodies() {
         const auto s = static_cast<std::size_t>(p_.shape[i]);
         if (s < poly_features_.size() && !poly_features_[s].edges.empty()) {
             travel_r_[i] = poly_features_[s].radius;
+        } else if (std::holds_alternative<geometry::Superquadric>(spec_.shapes[s].shape)) {
+            travel_r_[i] = p_.radius[i]; // for the box test of the member build only
         }
     }
     travel_q_ = p_.q;

@@ -197,7 +197,8 @@ class System {
     /// the same order, so the same bits.
     void use_member_lanes(bool on) { member_lanes_ = on; }
     /// The member build's box test (on, the default; off for tests and A/B): an entry of two
-    /// polyhedra whose boxes along their body axes are more than a skin apart is left out of the
+    /// polyhedra or superquadrics whose boxes along their body axes are more than a skin apart is
+    /// left out of the
     /// member pairs, and the member pairs are rebuilt when a body of such an entry has moved
     /// (travel_, rotation included) half a skin since. The same contacts, so the same bits.
     void use_box_filter(bool on) {
@@ -413,11 +414,11 @@ class System {
     bool box_lanes_ = true;
     bool member_lanes_ = true;    // use_member_lanes
     long member_pairs_built_ = 0; // member_pairs_built
-    // The box test of the member build (use_box_filter): per shape, the box of a polyhedron along
-    // its body axes (half extents < 0: none, the shape takes no box test); per particle, the
-    // travel_ at which a body of an entry left out may reach its partner (m; +infinity: in no
-    // such entry), read against travel_ at every posing (body_forces), which then rebuilds the
-    // member pairs; and per particle a mark of such bodies (scratch of the build).
+    // The box test of the member build (use_box_filter): per shape, the box of a polyhedron or
+    // superquadric along its body axes (half extents < 0: none, the shape takes no box test); per
+    // particle, the travel_ at which a body of an entry left out may reach its partner (m;
+    // +infinity: in no such entry), read against travel_ at every posing (body_forces), which then
+    // rebuilds the member pairs; and per particle a mark of such bodies (scratch of the build).
     bool box_filter_ = true;
     std::vector<geometry::BodyBox> body_boxes_;
     std::vector<double> box_limit_;
@@ -447,15 +448,16 @@ class System {
     };
     std::vector<SeparationProof> sep_proofs_;
     // Near misses skipped for several steps (body_forces): travel_[i] bounds how far any point of
-    // polyhedron body i has moved since the last list build (m; the centre's step plus the
-    // bounding radius times the change of the rotation, |R - R0| <= 2 min |q -+ q0|, in 2-norms,
-    // summed step by step and rounded upwards), brought up to the pose (travel_x_, travel_q_) at
-    // every posing. apart_below_[k]: when entry k's proof holds, the overlap along its direction
-    // stays below minus twice the margin while travel_[a] + travel_[b] stays below this (m;
-    // -infinity: no such bound); the first pass then counts the entry as proved apart without
-    // visiting it. Reset at every list build, cleared with the proof.
+    // polyhedron or superquadric body i has moved since the last list build (m; the centre's step
+    // plus the bounding radius times the change of the rotation, |R - R0| <= 2 min |q -+ q0|, in
+    // 2-norms, summed step by step and rounded upwards), brought up to the pose (travel_x_,
+    // travel_q_) at every posing. apart_below_[k]: when entry k's proof holds, the overlap along
+    // its direction stays below minus twice the margin while travel_[a] + travel_[b] stays below
+    // this (m; -infinity: no such bound); the first pass then counts the entry as proved apart
+    // without visiting it. Reset at every list build, cleared with the proof.
     std::vector<double> travel_;
-    std::vector<double> travel_r_; // per particle: a polyhedron's bounding radius, else 0 (m)
+    std::vector<double> travel_r_; // per particle: a polyhedron's or superquadric's bounding
+                                   // radius, else 0 (m)
     std::vector<Vec3> travel_x_;
     std::vector<Quat> travel_q_;
     std::vector<double> apart_below_;

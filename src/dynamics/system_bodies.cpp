@@ -536,7 +536,8 @@ void System::build_member_pairs() {
         }
     };
 #endif
-    // The box test (use_box_filter): an entry of two polyhedra whose boxes along their body axes
+    // The box test (use_box_filter): an entry of two polyhedra or superquadrics (either pair, a
+    // superquadric's box being its half axes) whose boxes along their body axes
     // are more than a skin apart cannot touch while neither body moves half a skin (travel_, which
     // bounds the motion of every point of a polyhedron, rotation included): it is left out, its
     // bodies marked, and body_forces rebuilds the member pairs before either has moved that far.
@@ -879,7 +880,8 @@ void System::body_forces(ChunkTotals& pair_totals, ChunkTotals& wall_totals) {
     }
     // travel_ brought up to this pose (system.hpp), in a loop of its own over the bodies (inside
     // the posing loop above its chain of operations waited on that loop's branches). Only
-    // polyhedra read it: travel_r_ is 0 for the other bodies.
+    // polyhedra and superquadrics read it (the latter in the member build's box test only):
+    // travel_r_ is 0 for the other bodies.
     bool box_reached = false; // a body of an entry left out by the box test may reach it
     if (travel_.size() == p_.size()) {
         const bool limits = box_limits_live_ && box_limit_.size() == p_.size();
