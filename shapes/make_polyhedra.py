@@ -90,6 +90,7 @@ def write(name, pts, what):
 write("cube", box(2.26, 2.26, 2.26), "cube, edge 2.26 mm (Oschmann 2019, Inv. IV)")
 write("cuboid_6x6x5", box(6.0, 6.0, 5.0), "cuboid 6 x 6 x 5 mm (Oschmann 2019, Inv. II)")
 write("plate_10x9x2", box(10.0, 9.0, 2.0), "plate 10 x 9 x 2 mm (Oschmann 2019, Inv. II)")
+write("plate_inv4", box(3.39, 3.39, 1.0), "plate 3.39 x 3.39 x 1 mm (Oschmann 2019, Inv. IV)")
 write("pyramid", pyramid(3.26, 3.26), "square pyramid, base 3.26 mm, height 3.26 mm (Inv. IV)")
 write("icosahedron", icosahedron(1.74), "regular icosahedron, edge 1.74 mm (Inv. IV)")
 write("cylinder_8", prism(8, 3.0, 6.0), "8-gon prism inscribed in the 6 x 6 mm cylinder (Inv. II)")

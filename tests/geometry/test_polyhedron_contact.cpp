@@ -1022,11 +1022,13 @@ TEST(SeparatingAxis, PolyhedronOverlapFromHeightsAgreesWithTheSupportForm) {
     static_assert(kRoundOff < 1e-3 * kProofMargin, "the margin must dwarf the difference");
     std::mt19937_64 rng(41);
     std::normal_distribution<double> nd;
-    // (The boxes, cube and plate, take the closed form of a box's highest corner.)
-    for (const std::string name : {"cube", "plate_10x9x2", "icosahedron", "cylinder_16"}) {
+    // (The boxes, cube and plates, take the closed form of a box's highest corner.)
+    for (const std::string name :
+         {"cube", "plate_10x9x2", "plate_inv4", "icosahedron", "cylinder_16"}) {
         SCOPED_TRACE(name);
         const g::PolyhedronFeatures f = load(name);
-        EXPECT_EQ(f.box.has_value(), name == "cube" || name == "plate_10x9x2");
+        EXPECT_EQ(f.box.has_value(),
+                  name == "cube" || name == "plate_10x9x2" || name == "plate_inv4");
         const double scale = 2.0 * f.radius;
         double worst = 0.0;
         for (int n = 0; n < 2000; ++n) {

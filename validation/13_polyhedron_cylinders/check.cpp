@@ -91,6 +91,7 @@ TEST(PolyhedronCylinders, ShippedShapesMatchClosedForms) {
     check_mass("cube", a * a * a, Vec3::Constant(a * a * a * a * a / 6.0));
     check_mass("cuboid_6x6x5", 1.8e-7, box(Vec3(6e-3, 6e-3, 5e-3)));
     check_mass("plate_10x9x2", 1.8e-7, box(Vec3(10e-3, 9e-3, 2e-3)));
+    check_mass("plate_inv4", 3.39e-3 * 3.39e-3 * 1e-3, box(Vec3(3.39e-3, 3.39e-3, 1e-3)));
     // Square pyramid, base b, height h: V = b^2 h / 3; about its axis V b^2 / 10; about a
     // centroidal axis parallel to the base V (b^2 / 20 + 3 h^2 / 80).
     const double b = 3.26e-3;
@@ -115,6 +116,7 @@ TEST(PolyhedronCylinders, SphericityMatchesTheSeedTables) {
     } cases[] = {{"cube", 0.8060, 5e-5},
                  {"pyramid", 0.7184, 5e-5},
                  {"icosahedron", 0.9393, 5e-5},
+                 {"plate_inv4", 0.6739, 5e-5},
                  {"cuboid_6x6x5", 0.80, 5e-3},
                  {"plate_10x9x2", 0.60, 5e-3}};
     for (const auto& c : cases) {
