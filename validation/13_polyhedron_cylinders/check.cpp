@@ -113,12 +113,9 @@ TEST(PolyhedronCylinders, SphericityMatchesTheSeedTables) {
         const char* name;
         double seed;
         double tolerance;
-    } cases[] = {{"cube", 0.8060, 5e-5},
-                 {"pyramid", 0.7184, 5e-5},
-                 {"icosahedron", 0.9393, 5e-5},
-                 {"plate_inv4", 0.6739, 5e-5},
-                 {"cuboid_6x6x5", 0.80, 5e-3},
-                 {"plate_10x9x2", 0.60, 5e-3}};
+    } cases[] = {{"cube", 0.8060, 5e-5},        {"pyramid", 0.7184, 5e-5},
+                 {"icosahedron", 0.9393, 5e-5}, {"plate_inv4", 0.6739, 5e-5},
+                 {"cuboid_6x6x5", 0.80, 5e-3},  {"plate_10x9x2", 0.60, 5e-3}};
     for (const auto& c : cases) {
         const geometry::ShapeFactors f = geometry::shape_factors(load(c.name));
         record(std::string(c.name) + " sphericity", f.sphericity, c.seed, c.tolerance, "-");
