@@ -4,6 +4,7 @@
 #include "dynamics/body_contact.hpp"
 
 #include "geometry/depth_refinement.hpp"
+#include "geometry/rotation.hpp"
 #include "geometry/separating_axis.hpp"
 
 #if defined(__AVX512F__)
@@ -637,10 +638,62 @@ Vec3 wall_point(const geometry::PosedPolyhedron& p, double overlap, const Vec3& 
     return (wsum > 0.0 ? Vec3(sum / wsum) : p.x) + 0.5 * overlap * n;
 }
 
-/// Polyhedron element against an analytic wall. Plane: the deepest vertex gives the overlap.
-/// Cylinder: the support along the outward radial direction, as for superquadrics. The point:
-/// wall_point.
+/// A box along its body axes (PolyhedronFeatures::Box::aligned, centred on the body origin, half
+/// extents h) against a plane wall: polyhedron_wall's answer in closed form (the same numbers to
+/// round-off). With the wall's normal n in the body frame (n_b = R^T n), the deepest corner has
+/// the coordinates -sign(n_b,k) h_k and lies sum_k h_k |n_b,k| below the body's centre along n;
+/// the corner with the axes of a set S flipped lies 2 sum_{k in S} h_k |n_b,k| higher, so its
+/// band weight is 1 - that rise / band. The contact point is the weighted average of the corners
+/// taken in the body frame and turned once, instead of eight vertices turned and measured.
+ElementContact box_plane_wall(const Element& a, const geometry::PolyhedronFeatures::Box& box,
+                              const PlaneWall& s) {
+    ElementContact out;
+    out.normal = s.normal;
+    const Mat3 rot = geometry::unit_rotation_matrix(a.q);
+    const Vec3 nb = rot.transpose() * s.normal;
+    const Vec3 reach = box.half.cwiseProduct(nb.cwiseAbs()); // each axis's share of the depth
+    const double overlap = reach.sum() - (a.centre - s.point).dot(s.normal);
+    if (!(overlap > 0.0)) {
+        if (overlap <= 0.0) {
+            out.wall_gap = -overlap; // the deepest corner's height
+        }
+        return out;
+    }
+    out.touching = true;
+    out.overlap = overlap;
+    const double band = kTieBand * overlap;
+    // The deepest corner, and the rise of flipping each axis as a fraction of the band.
+    Vec3 deepest;
+    Vec3 rise;
+    for (int k = 0; k < 3; ++k) {
+        deepest[k] = nb[k] > 0.0 ? -box.half[k] : box.half[k];
+        rise[k] = 2.0 * reach[k] / band;
+    }
+    Vec3 sum = Vec3::Zero();
+    double wsum = 0.0;
+    for (int c = 0; c < 8; ++c) { // bit k of c: axis k flipped
+        const bool fx = (c & 1) != 0;
+        const bool fy = (c & 2) != 0;
+        const bool fz = (c & 4) != 0;
+        const double w = std::max(
+            0.0, 1.0 - ((fx ? rise[0] : 0.0) + (fy ? rise[1] : 0.0) + (fz ? rise[2] : 0.0)));
+        sum += w * Vec3(fx ? -deepest[0] : deepest[0], fy ? -deepest[1] : deepest[1],
+                        fz ? -deepest[2] : deepest[2]);
+        wsum += w;
+    }
+    out.point = a.centre + rot * (sum / wsum) + 0.5 * overlap * s.normal;
+    out.r_eff = a.r_equiv;
+    return out;
+}
+
+/// Polyhedron element against an analytic wall. Plane: the deepest vertex gives the overlap (a
+/// box along its body axes: box_plane_wall). Cylinder: the support along the outward radial
+/// direction, as for superquadrics. The point: wall_point.
 ElementContact polyhedron_wall(const Element& a, const WallShape& w) {
+    if (const auto* plane = std::get_if<PlaneWall>(&w);
+        plane != nullptr && a.poly->box && a.poly->box->aligned) {
+        return box_plane_wall(a, *a.poly->box, *plane);
+    }
     ElementContact out;
     const geometry::PosedPolyhedron p{a.poly, a.centre, a.q};
     wall_deepest([&](const Vec3& d) { return p.support(d); }, a, w, out);
