@@ -198,9 +198,9 @@ class System {
     void use_member_lanes(bool on) { member_lanes_ = on; }
     /// The member build's box test (on, the default; off for tests and A/B): an entry of two
     /// polyhedra or superquadrics whose boxes along their body axes are more than a skin apart is
-    /// left out of the
-    /// member pairs, and the member pairs are rebuilt when a body of such an entry has moved
-    /// (travel_, rotation included) half a skin since. The same contacts, so the same bits.
+    /// left out of the member pairs, and the member pairs are rebuilt when a body of such an entry
+    /// has moved (travel_, rotation included) half a skin since. The same contacts, so the same
+    /// bits.
     void use_box_filter(bool on) {
         box_filter_ = on;
         members_valid_ = false;

@@ -536,11 +536,11 @@ void System::build_member_pairs() {
         }
     };
 #endif
-    // The box test (use_box_filter): an entry of two polyhedra or superquadrics (either pair, a
-    // superquadric's box being its half axes) whose boxes along their body axes
-    // are more than a skin apart cannot touch while neither body moves half a skin (travel_, which
-    // bounds the motion of every point of a polyhedron, rotation included): it is left out, its
-    // bodies marked, and body_forces rebuilds the member pairs before either has moved that far.
+    // The box test (use_box_filter): an entry of two polyhedra or superquadrics (in any mix; a
+    // superquadric's box is its half axes) whose boxes along their body axes are more than a skin
+    // apart cannot touch while neither body moves half a skin (travel_, which bounds the motion of
+    // every point of such a body, rotation included): it is left out, its bodies marked, and
+    // body_forces rebuilds the member pairs before either has moved that far.
     // Such entries are near misses of bounding spheres: of a flat plate in a settled pile, about
     // two in three list entries. travel_ must be current (it is, after index_bodies, at every
     // posing).
