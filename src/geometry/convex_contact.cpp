@@ -270,14 +270,26 @@ ConvexContact support_newton_contact(const PosedSuperquadric& a, const PosedSupe
                                      const Vec3* warm_normal, const NewtonSettings& settings,
                                      const std::array<Vec3, 2>* warm_supports) {
     const SupportMinimiser m(a, b, settings);
+    // A run that ends more than this (of the bodies' length scales) above a start it began at or
+    // that another run reached has crossed to another minimum; below it, the difference is the
+    // round-off that Newton's accepted steps may leave (roundoff_steps), and the run stands.
+    constexpr double kCrossedRun = 1e-6;
+    const double scale = a.length_scale() + b.length_scale();
     if (warm_normal != nullptr) {
         int iterations = 0;
         const Vec3 n0 = -*warm_normal;
-        const NewtonEnd end =
-            warm_supports != nullptr
-                ? m.newton(n0, m.eval_from(n0, (*warm_supports)[0], (*warm_supports)[1]),
-                           iterations)
-                : m.newton(n0, iterations);
+        const Eval e0 = warm_supports != nullptr
+                            ? m.eval_from(n0, (*warm_supports)[0], (*warm_supports)[1])
+                            : m.eval(n0);
+        NewtonEnd end = m.newton(n0, e0, iterations);
+        // A run that ends above its start has left the minimum it started at (on thin blocky
+        // shapes, e = 0.2 plates 1 mm thick, a run from the right side of a stacked pair crossed
+        // to the other face, 2 mm deep: docs/performance.md, "Session 34"). f at any direction is
+        // an upper bound of the MTD, so the start is the better answer: returned as a stalled run
+        // (the caller finishes it), or left to the cold start.
+        if (end.e.f > e0.f + kCrossedRun * scale) {
+            end = {n0, false, e0};
+        }
         if (end.ok || !settings.cold_after_warm) {
             ConvexContact c;
             c.depth = end.e.f;
@@ -308,17 +320,28 @@ ConvexContact support_newton_contact(const PosedSuperquadric& a, const PosedSupe
     }
     std::partial_sort(cand.begin(), cand.begin() + kStarts, cand.end(),
                       [](const auto& l, const auto& r) { return l.first.f < r.first.f; });
-    // Smallest f among the starts that converged (a start may stall near a maximum of f).
+    // Smallest f among the starts that converged (a start may stall near a maximum of f), but a
+    // run that ends above the best start's f has crossed to another minimum, and a stalled run
+    // below every converged one is the better bound: then the smallest f found is returned as
+    // a stalled run, for the caller to finish (f at any direction bounds the MTD from above).
     ConvexContact best;
     best.depth = 1e300;
     best.converged = false;
     int iterations = 0;
     Vec3 best_sa = Vec3::Zero();
     Vec3 best_sb = Vec3::Zero();
+    double lowest = cand.front().first.f; // the smallest f seen, at a start or a run's end
+    Vec3 lowest_n = cand.front().second;
+    Eval lowest_e = cand.front().first;
     for (int s = 0; s < kStarts; ++s) {
         const auto& start = cand[static_cast<std::size_t>(s)];
         const NewtonEnd end = m.newton(start.second, start.first, iterations);
         const double f = end.e.f;
+        if (f < lowest) {
+            lowest = f;
+            lowest_n = end.n;
+            lowest_e = end.e;
+        }
         if ((end.ok && !best.converged) || (end.ok == best.converged && f < best.depth)) {
             best.depth = f;
             best.normal = -end.n;
@@ -326,6 +349,13 @@ ConvexContact support_newton_contact(const PosedSuperquadric& a, const PosedSupe
             best_sa = end.e.sa;
             best_sb = end.e.sb;
         }
+    }
+    if (lowest < best.depth - kCrossedRun * scale) {
+        best.depth = lowest;
+        best.normal = -lowest_n;
+        best.converged = false;
+        best_sa = lowest_e.sa;
+        best_sb = lowest_e.sb;
     }
     best.iterations = iterations;
     best.touching = best.depth > 0.0;

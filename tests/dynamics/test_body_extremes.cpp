@@ -4,7 +4,9 @@
 
 #include "dynamics/body_contact.hpp"
 #include "dynamics/system.hpp"
+#include "geometry/superquadric.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <gtest/gtest.h>
 #include <numbers>
@@ -44,6 +46,43 @@ TEST(BodyExtremes, FaceOnCubesAtTopBlockinessGiveAxisNormalAndDepth) {
         // Flat on flat: R* is the larger bounding radius, never infinite.
         constexpr double rounding = 1e-9; // relative; the corners' curvature is not quite zero
         EXPECT_NEAR(c.r_eff / cube.bounding_radius(), 1.0, rounding);
+    }
+}
+
+TEST(BodyExtremes, StackedThinPlatesDoNotCrossToTheFarFace) {
+    // Two of the seed's Inv. IV plates as superquadrics (3.39 x 3.39 x 1 mm, exponents 0.2),
+    // stacked almost flat, barely touching: the pose of a lattice pour (bench/lattice_scene.hpp,
+    // shape "plate") where Newton on the sphere of directions, started from the right side (the
+    // last step's normal, from b down to a) or cold, ended on the far face's minimum, 2.04 mm
+    // deep with the normal upwards, and the pile blew up (docs/performance.md, "Session 34"). The
+    // depth along any direction bounds the minimum translation distance from above, so the
+    // answer may not exceed the smallest overlap of 4000 sampled directions.
+    const auto plate = sq(Vec3(1.695e-3, 1.695e-3, 0.5e-3), 0.2, 0.2);
+    const Element a =
+        convex(plate, Vec3(0.020621543107547696, 0.021059402932523487, 0.00064685252084877227),
+               Quat(-0.020369750750663936, -0.34752000808476619, -0.93695345777796502,
+                    0.030547261629072914));
+    const Element b =
+        convex(plate, Vec3(0.020775735893694917, 0.020722329575371387, 0.0016941464452528271),
+               Quat(-0.022492736770546987, -0.29666343722750688, -0.9544490972622125,
+                    0.022623053292599376));
+    const geometry::PosedSuperquadric pa{&plate, a.centre, a.q};
+    const geometry::PosedSuperquadric pb{&plate, b.centre, b.q};
+    double sampled = 1.0;
+    for (int i = 0; i < 4000; ++i) { // a spiral over the sphere of directions (normal from b to a)
+        const double z = 1.0 - (2.0 * i + 1.0) / 4000.0;
+        const double phi = i * std::numbers::pi * (3.0 - std::sqrt(5.0));
+        const Vec3 n(std::sqrt(1.0 - z * z) * std::cos(phi), std::sqrt(1.0 - z * z) * std::sin(phi),
+                     z);
+        sampled = std::min(sampled, n.dot(pb.support(n)) - n.dot(pa.support(-n)));
+    }
+    ASSERT_LT(sampled, 1e-4); // the true depth is tiny (the plates are 1 mm thick)
+    const Vec3 down = -Vec3::UnitZ();
+    for (const Vec3* warm : {&down, static_cast<const Vec3*>(nullptr)}) {
+        const ElementContact c = element_contact(a, b, NarrowPhase::newton, warm);
+        EXPECT_TRUE(c.converged);
+        EXPECT_LE(c.overlap, sampled + 1e-9) << (warm != nullptr ? "warm" : "cold");
+        EXPECT_LT(c.normal.z(), -0.99) << (warm != nullptr ? "warm" : "cold");
     }
 }
 
