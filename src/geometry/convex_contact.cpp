@@ -330,17 +330,13 @@ ConvexContact support_newton_contact(const PosedSuperquadric& a, const PosedSupe
     int iterations = 0;
     Vec3 best_sa = Vec3::Zero();
     Vec3 best_sb = Vec3::Zero();
-    double lowest = cand.front().first.f; // the smallest f seen, at a start or a run's end
-    Vec3 lowest_n = cand.front().second;
-    Eval lowest_e = cand.front().first;
+    NewtonEnd lowest{cand.front().second, false, cand.front().first}; // smallest f seen
     for (int s = 0; s < kStarts; ++s) {
         const auto& start = cand[static_cast<std::size_t>(s)];
         const NewtonEnd end = m.newton(start.second, start.first, iterations);
         const double f = end.e.f;
-        if (f < lowest) {
-            lowest = f;
-            lowest_n = end.n;
-            lowest_e = end.e;
+        if (f < lowest.e.f) {
+            lowest = end;
         }
         if ((end.ok && !best.converged) || (end.ok == best.converged && f < best.depth)) {
             best.depth = f;
@@ -350,12 +346,12 @@ ConvexContact support_newton_contact(const PosedSuperquadric& a, const PosedSupe
             best_sb = end.e.sb;
         }
     }
-    if (lowest < best.depth - kCrossedRun * scale) {
-        best.depth = lowest;
-        best.normal = -lowest_n;
+    if (lowest.e.f < best.depth - kCrossedRun * scale) {
+        best.depth = lowest.e.f;
+        best.normal = -lowest.n;
         best.converged = false;
-        best_sa = lowest_e.sa;
-        best_sb = lowest_e.sb;
+        best_sa = lowest.e.sa;
+        best_sb = lowest.e.sb;
     }
     best.iterations = iterations;
     best.touching = best.depth > 0.0;

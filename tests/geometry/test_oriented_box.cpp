@@ -6,6 +6,7 @@
 #include "geometry/oriented_box.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <gtest/gtest.h>
@@ -35,6 +36,21 @@ std::array<Vec3, 8> corners(const Box& b) {
     return out;
 }
 
+/// The gap (m) between the two boxes' shadows on the unit axis u, from their corners (negative:
+/// the shadows overlap).
+double shadow_gap(const Box& a, const Box& b, const Vec3& u) {
+    double lo_a = 1e300, hi_a = -1e300, lo_b = 1e300, hi_b = -1e300;
+    for (const Vec3& c : corners(a)) {
+        lo_a = std::min(lo_a, u.dot(c));
+        hi_a = std::max(hi_a, u.dot(c));
+    }
+    for (const Vec3& c : corners(b)) {
+        lo_b = std::min(lo_b, u.dot(c));
+        hi_b = std::max(hi_b, u.dot(c));
+    }
+    return std::max(lo_b - hi_a, lo_a - hi_b);
+}
+
 /// The largest gap (m) between the two boxes' shadows on the 15 unit axes (faces of each, cross
 /// products of their edges), from their corners: negative when no axis separates them, which for
 /// two boxes means that they overlap. Independent of boxes_apart's algebra.
@@ -50,18 +66,9 @@ double largest_shadow_gap(const Box& a, const Box& b) {
             }
         }
     }
-    const auto ca = corners(a);
-    const auto cb = corners(b);
     double best = -1e300;
     for (const Vec3& u : axes) {
-        double lo_a = 1e300, hi_a = -1e300, lo_b = 1e300, hi_b = -1e300;
-        for (int k = 0; k < 8; ++k) {
-            lo_a = std::min(lo_a, u.dot(ca[static_cast<std::size_t>(k)]));
-            hi_a = std::max(hi_a, u.dot(ca[static_cast<std::size_t>(k)]));
-            lo_b = std::min(lo_b, u.dot(cb[static_cast<std::size_t>(k)]));
-            hi_b = std::max(hi_b, u.dot(cb[static_cast<std::size_t>(k)]));
-        }
-        best = std::max(best, std::max(lo_b - hi_a, lo_a - hi_b));
+        best = std::max(best, shadow_gap(a, b, u));
     }
     return best;
 }
@@ -168,18 +175,9 @@ TEST(OrientedBox, AgreesWithTheCornersShadows) {
         }
         // A face axis with a clear gap must be found.
         double face_gap = -1e300;
-        const auto ca = corners(a);
-        const auto cb = corners(b);
-        for (int i = 0; i < 6; ++i) {
-            const Vec3 u = i < 3 ? a.r.col(i) : b.r.col(i - 3);
-            double lo_a = 1e300, hi_a = -1e300, lo_b = 1e300, hi_b = -1e300;
-            for (std::size_t k = 0; k < 8; ++k) {
-                lo_a = std::min(lo_a, u.dot(ca[k]));
-                hi_a = std::max(hi_a, u.dot(ca[k]));
-                lo_b = std::min(lo_b, u.dot(cb[k]));
-                hi_b = std::max(hi_b, u.dot(cb[k]));
-            }
-            face_gap = std::max(face_gap, std::max(lo_b - hi_a, lo_a - hi_b));
+        for (int i = 0; i < 3; ++i) {
+            face_gap =
+                std::max({face_gap, shadow_gap(a, b, a.r.col(i)), shadow_gap(a, b, b.r.col(i))});
         }
         if (face_gap > gap + 1e-6) {
             EXPECT_TRUE(said) << trial;
