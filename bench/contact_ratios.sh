@@ -14,14 +14,15 @@
 #
 # Usage: bench/contact_ratios.sh [ROUNDS [KIND...]]  (default 3 rounds; kinds: every shape of the
 # seed: sphere, the clumps cylinder_12 and cylinder_36, the boxes cube, cuboid_6x6x5, plate_10x9x2
-# and plate_inv4, the polyhedra pyramid, icosahedron and cylinder_16; any shipped shape name or
+# and plate_inv4, the polyhedra pyramid, icosahedron, cylinder_8 and cylinder_16 (the seed's
+# prisms of 8 and 16 edges, Inv. II); any shipped shape name or
 # sq08/sq03 works). Needs a Release build with benchmarks (scripts/setup.sh), or
 # KILN_SCENE_STEPS pointing at a kiln_scene_steps binary. Figures: docs/performance.md.
 set -euo pipefail
 script=bench/contact_ratios.sh
 default_rounds=3
 default_kinds=(sphere cylinder_12 cylinder_36 cube cuboid_6x6x5 plate_10x9x2 plate_inv4 pyramid
-    icosahedron cylinder_16)
+    icosahedron cylinder_8 cylinder_16)
 source "$(dirname "${BASH_SOURCE[0]}")/scene_args.sh"
 [[ " ${kinds[*]} " == *" sphere "* ]] || kinds=(sphere "${kinds[@]}")
 

@@ -21,6 +21,9 @@ Vec3 angular_velocity_world(const Quat& q, const Vec3& L_world, const Vec3& iner
     if (spherical_top(inertia_principal)) {               // as the Mat3 form (rotation.hpp)
         return L_world * (3.0 / inertia_principal.sum()); // L / spherical_moment, one division
     }
+    if (const int s = symmetric_axis(inertia_principal); s >= 0) {
+        return symmetric_omega(body_to_world(q, Vec3::Unit(s)), L_world, inertia_principal, s);
+    }
     const Vec3 l_body = world_to_body(q, L_world);
     return body_to_world(q, l_body.cwiseQuotient(inertia_principal));
 }
@@ -116,15 +119,14 @@ template <bool series_only>
     w /= norm;
 }
 
-/// The exact torque-free flow of a spherical top (spherical_top(I), one moment i: the body turns
-/// about the fixed world L at omega = L / i) on plain numbers: q <- (cos x, sin x L / |L|) q, the
-/// turn in the world frame on the left, with the half angle x = |L| k, k = dt / (2 i). sin(x) / x
-/// and cos(x) from their series in x^2 (no square root; to the terms of sin_cos) where
-/// x <= kSeriesLimit, the library beyond (never with `series_only`, whose caller has checked).
-/// (x, y, z, w) renormalised.
+/// The turn about the fixed world L at the rate |L| / i on plain numbers, not renormalised:
+/// (x, y, z, w) <- (cos x, sin x L / |L|) q, the factor in the world frame on the left, with the
+/// half angle x = |L| k, k = dt / (2 i). sin(x) / x and cos(x) from their series in x^2 (no square
+/// root; to the terms of sin_cos) where x <= kSeriesLimit, the library beyond (never with
+/// `series_only`, whose caller has checked).
 template <bool series_only>
-[[gnu::always_inline]] inline void spherical_turn(double& x, double& y, double& z, double& w,
-                                                  double l0, double l1, double l2, double k) {
+[[gnu::always_inline]] inline void turn_about_l(double& x, double& y, double& z, double& w,
+                                                double l0, double l1, double l2, double k) {
     const double x2 = (l0 * l0 + l1 * l1 + l2 * l2) * (k * k);
     double sinc = 1.0;
     double c = 1.0;
@@ -144,16 +146,88 @@ template <bool series_only>
     const double x1 = c * x + w * v0 + (v1 * z - v2 * y);
     const double y1 = c * y + w * v1 + (v2 * x - v0 * z);
     const double z1 = c * z + w * v2 + (v0 * y - v1 * x);
-    const double inv = 1.0 / std::sqrt(x1 * x1 + y1 * y1 + z1 * z1 + w1 * w1);
-    x = x1 * inv;
-    y = y1 * inv;
-    z = z1 * inv;
-    w = w1 * inv;
+    x = x1;
+    y = y1;
+    z = z1;
+    w = w1;
+}
+
+/// (x, y, z, w) divided by its norm.
+[[gnu::always_inline]] inline void renormalise(double& x, double& y, double& z, double& w) {
+    const double inv = 1.0 / std::sqrt(x * x + y * y + z * z + w * w);
+    x *= inv;
+    y *= inv;
+    z *= inv;
+    w *= inv;
+}
+
+/// The exact torque-free flow of a spherical top (spherical_top(I), one moment i: the body turns
+/// about the fixed world L at omega = L / i) on plain numbers: turn_about_l with k = dt / (2 i),
+/// (x, y, z, w) renormalised.
+template <bool series_only>
+[[gnu::always_inline]] inline void spherical_turn(double& x, double& y, double& z, double& w,
+                                                  double l0, double l1, double l2, double k) {
+    turn_about_l<series_only>(x, y, z, w, l0, l1, l2, k);
+    renormalise(x, y, z, w);
+}
+
+/// The exact torque-free flow of a symmetric top (symmetric_axis(I) = s, moments i_p, i_p, i_s;
+/// Landau & Lifshitz, Mechanics, Sec. 33) on plain numbers: q <- A q B. A = (cos a, sin a L / |L|)
+/// turns the body about the fixed world L at |L| / i_p (turn_about_l, k = dt / (2 i_p)); B =
+/// (cos b, sin b e_s), in the body frame on the right, spins it about its symmetry axis e_s by
+/// the half angle b = L_s dt (1 / i_s - 1 / i_p) / 2, L_s = L . (R e_s), which the flow keeps
+/// constant. Their rates add up to omega = L / i_p + L_s (1 / i_s - 1 / i_p) R e_s = R diag(1/I)
+/// R^T L, so A(t) q0 B(t) is the flow itself, not an approximation of it. (e0, e1, e2) = e_s, a
+/// unit axis of the body frame; sin b and cos b as turn_about_l's; (x, y, z, w) renormalised.
+template <bool series_only>
+[[gnu::always_inline]] inline void symmetric_turn(double& x, double& y, double& z, double& w,
+                                                  double l0, double l1, double l2, double k,
+                                                  double b, double e0, double e1, double e2) {
+    turn_about_l<series_only>(x, y, z, w, l0, l1, l2, k);
+    double sinc = 1.0;
+    double c = 1.0;
+    sinc_cos_series(b * b, sinc, c);
+    double s = b * sinc;
+    if constexpr (!series_only) {
+        if (std::abs(b) > kSeriesLimit) {
+            s = std::sin(b);
+            c = std::cos(b);
+        }
+    }
+    // (w, v) (c, s e) = (c w - s v.e, c v + s w e + s v x e); e has one non-zero component, so
+    // v.e and v x e are exact.
+    const double u0 = s * e0;
+    const double u1 = s * e1;
+    const double u2 = s * e2;
+    const double w1 = c * w - (x * u0 + y * u1 + z * u2);
+    const double x1 = c * x + w * u0 + (y * u2 - z * u1);
+    const double y1 = c * y + w * u1 + (z * u0 - x * u2);
+    const double z1 = c * z + w * u2 + (x * u1 - y * u0);
+    x = x1;
+    y = y1;
+    z = z1;
+    w = w1;
+    renormalise(x, y, z, w);
 }
 
 /// Half angle per unit |L| of a spherical top over dt: dt / (2 i).
 inline double spherical_rate(const Vec3& inertia_principal, double dt) {
     return 0.5 * dt / spherical_moment(inertia_principal);
+}
+
+/// The numbers of symmetric_turn for a symmetric top about body axis s (symmetric_axis(I)) with
+/// rotation matrix rot (body -> world) and world L, over dt: k = dt / (2 i_p) and the half angle b
+/// of the spin about e_s.
+struct SymmetricRates {
+    double k;
+    double b;
+};
+inline SymmetricRates symmetric_rates(const Vec3& inertia_principal, int s, const Mat3& rot,
+                                      const Vec3& L_world, double dt) {
+    const auto a = static_cast<Eigen::Index>(s);
+    const double ip = transverse_moment(inertia_principal, s);
+    const double l_s = rot.col(a).dot(L_world);
+    return {0.5 * dt / ip, 0.5 * dt * l_s * (1.0 / inertia_principal[a] - 1.0 / ip)};
 }
 
 } // namespace
@@ -165,6 +239,16 @@ void free_rotate(Quat& q, Mat3& rot, const Vec3& L_world, const Vec3& inertia_pr
         double qv[4] = {q.x(), q.y(), q.z(), q.w()};
         spherical_turn<false>(qv[0], qv[1], qv[2], qv[3], L_world.x(), L_world.y(), L_world.z(),
                               spherical_rate(inertia_principal, dt));
+        q = Quat(qv[3], qv[0], qv[1], qv[2]);
+        rot = unit_rotation_matrix(q);
+        return;
+    }
+    if (const int s = symmetric_axis(inertia_principal); s >= 0) {
+        const SymmetricRates r = symmetric_rates(inertia_principal, s, rot, L_world, dt);
+        const Vec3 e = Vec3::Unit(static_cast<Eigen::Index>(s));
+        double qv[4] = {q.x(), q.y(), q.z(), q.w()};
+        symmetric_turn<false>(qv[0], qv[1], qv[2], qv[3], L_world.x(), L_world.y(), L_world.z(),
+                              r.k, r.b, e.x(), e.y(), e.z());
         q = Quat(qv[3], qv[0], qv[1], qv[2]);
         rot = unit_rotation_matrix(q);
         return;
@@ -181,26 +265,31 @@ void free_rotate(Quat& q, Mat3& rot, const Vec3& L_world, const Vec3& inertia_pr
 void free_rotate_bodies(const std::uint32_t* index, std::size_t n, Quat* q, const Mat3* rot,
                         const Vec3* L_world, const Vec3* inertia_principal, double dt) {
     // Bodies by batches of `lanes` in structure-of-arrays form, spherical tops (cubes, regular
-    // polyhedra: the exact turn) and the others (the splitting) in batches of their own, taken
-    // from pieces of `piece` bodies; a batch is evaluated lane-parallel (vectorised) with the
-    // series only, then any body whose half angle could pass kSeriesLimit is redone alone with the
-    // general path (splitting: |L| dt / (2 I_min), an upper bound since |L| is kept). Lanes past
-    // the end are padded with a body at rest, so every batch is the same full loop.
+    // polyhedra: the exact turn), symmetric tops (the exact turn and spin) and the others (the
+    // splitting) in batches of their own, taken from pieces of `piece` bodies; a batch is
+    // evaluated lane-parallel (vectorised) with the series only, then any body whose half angle
+    // could pass kSeriesLimit is redone alone with the general path (splitting: |L| dt / (2 I_min),
+    // an upper bound since |L| is kept). Lanes past the end are padded with a body at rest, so
+    // every batch is the same full loop.
     constexpr std::size_t lanes = 8;
     constexpr std::size_t piece = 64;
     alignas(64) double qv[4][lanes];
     alignas(64) double l[3][lanes];
     alignas(64) double inv_i[3][lanes];
+    alignas(64) double axis[3][lanes];
     bool general[lanes];
+    enum class Kind { spherical, symmetric, other };
     // Batch [b0, b0 + m) of `list` into the lanes: the quaternion, L (world frame for a spherical
-    // top, body frame for the splitting) and 1 / I (spherical: dt / (2 i) in inv_i[0]).
-    const auto load = [&](const std::uint32_t* list, std::size_t m, bool spherical) {
+    // or symmetric top, body frame for the splitting) and 1 / I (spherical: dt / (2 i) in
+    // inv_i[0]; symmetric: symmetric_rates' k and b in inv_i[0] and inv_i[1], e_s in axis).
+    const auto load = [&](const std::uint32_t* list, std::size_t m, Kind kind) {
         for (std::size_t b = 0; b < lanes; ++b) {
             if (b >= m) {
                 for (int c = 0; c < 3; ++c) {
                     qv[c][b] = 0.0;
                     l[c][b] = 0.0;
                     inv_i[c][b] = 1.0;
+                    axis[c][b] = 0.0;
                 }
                 qv[3][b] = 1.0;
                 general[b] = false;
@@ -211,7 +300,21 @@ void free_rotate_bodies(const std::uint32_t* index, std::size_t n, Quat* q, cons
                 qv[c][b] = q[i].coeffs()[c];
             }
             qv[3][b] = q[i].w();
-            if (spherical) {
+            if (kind == Kind::symmetric) {
+                const int s = symmetric_axis(inertia_principal[i]);
+                const SymmetricRates r =
+                    symmetric_rates(inertia_principal[i], s, rot[i], L_world[i], dt);
+                for (int c = 0; c < 3; ++c) {
+                    l[c][b] = L_world[i][c];
+                    axis[c][b] = c == s ? 1.0 : 0.0;
+                }
+                inv_i[0][b] = r.k;
+                inv_i[1][b] = r.b;
+                general[b] = L_world[i].squaredNorm() * (r.k * r.k) > kSeriesLimit * kSeriesLimit ||
+                             std::abs(r.b) > kSeriesLimit;
+                continue;
+            }
+            if (kind == Kind::spherical) {
                 const double k = spherical_rate(inertia_principal[i], dt);
                 for (int c = 0; c < 3; ++c) {
                     l[c][b] = L_world[i][c];
@@ -242,20 +345,24 @@ void free_rotate_bodies(const std::uint32_t* index, std::size_t n, Quat* q, cons
     };
     for (std::size_t p0 = 0; p0 < n; p0 += piece) {
         std::uint32_t top[piece];
+        std::uint32_t sym[piece];
         std::uint32_t other[piece];
         std::size_t n_top = 0;
+        std::size_t n_sym = 0;
         std::size_t n_other = 0;
         for (std::size_t b = p0; b < std::min(n, p0 + piece); ++b) {
             const std::uint32_t i = index[b];
             if (spherical_top(inertia_principal[i])) {
                 top[n_top++] = i;
+            } else if (symmetric_axis(inertia_principal[i]) >= 0) {
+                sym[n_sym++] = i;
             } else {
                 other[n_other++] = i;
             }
         }
         for (std::size_t b0 = 0; b0 < n_top; b0 += lanes) {
             const std::size_t m = std::min(lanes, n_top - b0);
-            load(top + b0, m, true);
+            load(top + b0, m, Kind::spherical);
 #pragma omp simd
             for (std::size_t b = 0; b < lanes; ++b) {
                 spherical_turn<true>(qv[0][b], qv[1][b], qv[2][b], qv[3][b], l[0][b], l[1][b],
@@ -263,9 +370,20 @@ void free_rotate_bodies(const std::uint32_t* index, std::size_t n, Quat* q, cons
             }
             store(top + b0, m);
         }
+        for (std::size_t b0 = 0; b0 < n_sym; b0 += lanes) {
+            const std::size_t m = std::min(lanes, n_sym - b0);
+            load(sym + b0, m, Kind::symmetric);
+#pragma omp simd
+            for (std::size_t b = 0; b < lanes; ++b) {
+                symmetric_turn<true>(qv[0][b], qv[1][b], qv[2][b], qv[3][b], l[0][b], l[1][b],
+                                     l[2][b], inv_i[0][b], inv_i[1][b], axis[0][b], axis[1][b],
+                                     axis[2][b]);
+            }
+            store(sym + b0, m);
+        }
         for (std::size_t b0 = 0; b0 < n_other; b0 += lanes) {
             const std::size_t m = std::min(lanes, n_other - b0);
-            load(other + b0, m, false);
+            load(other + b0, m, Kind::other);
 #pragma omp simd
             for (std::size_t b = 0; b < lanes; ++b) {
                 split_rotation<true>(qv[0][b], qv[1][b], qv[2][b], qv[3][b], l[0][b], l[1][b],

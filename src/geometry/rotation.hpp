@@ -28,6 +28,7 @@
 
 #include "core/types.hpp"
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -93,12 +94,37 @@ inline constexpr double kSphericalTop = 1e-12;
     return inertia_principal.sum() / 3.0;
 }
 
+/// The symmetry axis of a symmetric top: the body axis (0, 1, 2) whose moment differs while the
+/// other two are equal to a relative kSphericalTop (cuboids of square section, regular prisms,
+/// square pyramids, rotationally symmetric clumps and superquadrics); -1 for a spherical top or
+/// three different moments (kg m^2, body frame).
+[[nodiscard]] inline int symmetric_axis(const Vec3& inertia_principal) {
+    if (spherical_top(inertia_principal)) {
+        return -1;
+    }
+    const double tol = kSphericalTop * inertia_principal.maxCoeff();
+    for (int s = 0; s < 3; ++s) {
+        const double a = inertia_principal[(s + 1) % 3];
+        const double b = inertia_principal[(s + 2) % 3];
+        if (std::abs(a - b) <= tol) {
+            return s;
+        }
+    }
+    return -1;
+}
+/// The moment (kg m^2) about the axes across the symmetry axis s of a symmetric top: the mean of
+/// the two equal ones.
+[[nodiscard]] inline double transverse_moment(const Vec3& inertia_principal, int s) {
+    return 0.5 * (inertia_principal[(s + 1) % 3] + inertia_principal[(s + 2) % 3]);
+}
+
 /// Torque-free rotation over dt (s) by the symmetric splitting X(dt/2) Y(dt/2) Z(dt) Y(dt/2)
 /// X(dt/2) (Dullweber et al. 1997). Updates q (body -> world, renormalised); L_world is constant
 /// under free rotation and is therefore not an argument to modify. Inertia in the body frame
 /// (kg m^2, all > 0). A spherical top (spherical_top) instead turns exactly: about the fixed L at
 /// omega = L / spherical_moment(I), which the splitting only approximates (its sub-rotations do
-/// not commute; error O((omega dt)^3) per step).
+/// not commute; error O((omega dt)^3) per step). So does a symmetric top (symmetric_axis >= 0):
+/// about L at |L| / i_p composed with a spin about its symmetry axis (docs/theory/rotation.md).
 void free_rotate(Quat& q, const Vec3& L_world, const Vec3& inertia_principal, double dt);
 
 /// As above for a body whose rotation matrix is kept alongside q: `rot` is R(q) (body -> world)
@@ -111,10 +137,21 @@ void free_rotate(Quat& q, Mat3& rot, const Vec3& L_world, const Vec3& inertia_pr
 /// free_rotate for the bodies index[0 .. n) of particle arrays: q (body -> world, updated and
 /// renormalised), rot = R(q) on entry (not updated: take unit_rotation_matrix of the new q), world
 /// angular momenta (kg m^2/s) and principal moments (kg m^2, body frame). Bodies are turned eight
-/// at a time in vector lanes; the same splitting and series as free_rotate, a body turning faster
-/// than the series allows taking the general path.
+/// at a time in vector lanes, spherical tops, symmetric tops and the others in batches of their
+/// own; the same flows, splitting and series as free_rotate, a body turning faster than the
+/// series allows taking the general path.
 void free_rotate_bodies(const std::uint32_t* index, std::size_t n, Quat* q, const Mat3* rot,
                         const Vec3* L_world, const Vec3* inertia_principal, double dt);
+
+/// Angular velocity (rad/s, world frame) of a symmetric top with symmetry axis s (symmetric_axis)
+/// along the world unit vector e (R e_s): L / i_p + (1 / i_s - 1 / i_p) (L . e) e, which is
+/// R diag(1/I) R^T L for I = (i_p, i_p, i_s) without the two products by R.
+[[nodiscard]] inline Vec3 symmetric_omega(const Vec3& e, const Vec3& L_world,
+                                          const Vec3& inertia_principal, int s) {
+    const double inv_p = 1.0 / transverse_moment(inertia_principal, s);
+    const double inv_s = 1.0 / inertia_principal[s];
+    return inv_p * L_world + ((inv_s - inv_p) * e.dot(L_world)) * e;
+}
 
 /// Angular velocity in the world frame (rad/s) from rot = R(q) (body -> world), the world angular
 /// momentum (kg m^2/s) and the principal moments (kg m^2, body frame): R diag(1/I) R^T L.
@@ -122,6 +159,9 @@ void free_rotate_bodies(const std::uint32_t* index, std::size_t n, Quat* q, cons
                                                  const Vec3& inertia_principal) {
     if (spherical_top(inertia_principal)) {
         return L_world * (3.0 / inertia_principal.sum()); // L / spherical_moment, one division
+    }
+    if (const int s = symmetric_axis(inertia_principal); s >= 0) {
+        return symmetric_omega(rot.col(s), L_world, inertia_principal, s);
     }
     const Vec3 l_body = rot.transpose() * L_world;
     return rot * l_body.cwiseQuotient(inertia_principal);
