@@ -2,6 +2,7 @@
 
 #include "app/shape_info.hpp"
 
+#include "geometry/rotation.hpp"
 #include "geometry/shape_metrics.hpp"
 #include "io/shape_reader.hpp"
 #include "io/shape_vtk.hpp"
@@ -43,6 +44,15 @@ int print_shape_info(const std::string& shape, double density, const std::string
     const Vec3 inertia = t.inertia(density);
     fmt::print("principal inertia {:.6e} {:.6e} {:.6e} kg m^2 (body x, y, z)\n", inertia.x(),
                inertia.y(), inertia.z());
+    // Which free rotation the step takes for this shape (docs/theory/rotation.md).
+    if (geometry::spherical_top(inertia)) {
+        fmt::print("rotation          spherical top: exact turn about L\n");
+    } else if (const int s = geometry::symmetric_axis(inertia); s >= 0) {
+        fmt::print("rotation          symmetric top about body {}: exact turn about L and spin\n",
+                   "xyz"[s]);
+    } else {
+        fmt::print("rotation          asymmetric: symmetric splitting (second order)\n");
+    }
     fmt::print("bounding radius   {:.6e} m\n", t.bounding_radius());
     fmt::print("surface area      {:.6e} m^2 (estimated error {:.1e} m^2)\n", f.surface.value,
                f.surface.error);
