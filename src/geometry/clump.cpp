@@ -118,6 +118,31 @@ MassProperties union_mass_properties(const std::vector<ClumpSphere>& spheres, in
     return mp;
 }
 
+Vec3 equal_within(const Vec3& moments, double tol) {
+    // The three moments, then the closest two: set to their mean where they differ by no more
+    // than tol of the largest moment (none with tol 0: a one-sphere clump's are exact).
+    if (!(tol > 0.0)) {
+        return moments;
+    }
+    const double bar = tol * moments.maxCoeff();
+    if (moments.maxCoeff() - moments.minCoeff() <= bar) {
+        return Vec3::Constant(moments.sum() / 3.0);
+    }
+    int s = 0; // the moment left out of the closest pair
+    for (int k = 1; k < 3; ++k) {
+        const double gap_k = std::abs(moments[(k + 1) % 3] - moments[(k + 2) % 3]);
+        const double gap_s = std::abs(moments[(s + 1) % 3] - moments[(s + 2) % 3]);
+        s = gap_k < gap_s ? k : s;
+    }
+    const int a = (s + 1) % 3;
+    const int b = (s + 2) % 3;
+    Vec3 out = moments;
+    if (std::abs(moments[a] - moments[b]) <= bar) {
+        out[a] = out[b] = 0.5 * (moments[a] + moments[b]);
+    }
+    return out;
+}
+
 Clump make_clump(const std::vector<ClumpSphere>& spheres, const std::string& where, int n) {
     if (spheres.empty()) {
         throw InputError(where + ": a clump needs at least one sphere");
@@ -144,7 +169,7 @@ Clump make_clump(const std::vector<ClumpSphere>& spheres, const std::string& whe
     }
     const PrincipalFrame pf = principal_frame(mp.inertia_centroid);
     c.volume = mp.volume;
-    c.inertia_unit_density = pf.moments;
+    c.inertia_unit_density = equal_within(pf.moments, c.volume_error / c.volume);
     c.template_axes = pf.axes;
     c.template_centroid = mp.centroid;
     for (const ClumpSphere& s : spheres) {

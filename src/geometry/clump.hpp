@@ -32,6 +32,13 @@ struct Clump {
     [[nodiscard]] bool contains(const Vec3& p_body) const;
 };
 
+/// Principal moments (any unit) with those that differ by no more than the relative tolerance
+/// `tol` (of the largest) made equal: all three to their mean, else the closest two. make_clump
+/// applies it with the quadrature's relative volume error, so that a clump symmetric about an
+/// axis (a ring of equal spheres, a dimer), whose equal moments the column quadrature gives apart
+/// by up to its error, is a symmetric top (geometry::symmetric_axis) and turns by its exact flow.
+[[nodiscard]] Vec3 equal_within(const Vec3& moments, double tol);
+
 /// Resultant force (N) and torque about the centre of mass (N m) on a rigid body, world frame.
 struct Wrench {
     Vec3 force = Vec3::Zero();  ///< total force (N), world frame
