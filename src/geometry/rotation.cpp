@@ -119,6 +119,23 @@ template <bool series_only>
     w /= norm;
 }
 
+/// (x, y, z, w) <- (c, v) (w, x, y, z) with `left`, else (w, x, y, z) (c, v): the quaternion
+/// product by a factor of scalar part c and vector part v on plain numbers, not renormalised.
+/// (Written once for both sides so that each keeps its order of operations: w c - v.q, and
+/// c q + w v plus v x q on the left, q x v on the right.)
+template <bool left>
+[[gnu::always_inline]] inline void multiply_by(double c, double v0, double v1, double v2, double& x,
+                                               double& y, double& z, double& w) {
+    const double w1 = c * w - (v0 * x + v1 * y + v2 * z);
+    const double x1 = c * x + w * v0 + (left ? v1 * z - v2 * y : y * v2 - z * v1);
+    const double y1 = c * y + w * v1 + (left ? v2 * x - v0 * z : z * v0 - x * v2);
+    const double z1 = c * z + w * v2 + (left ? v0 * y - v1 * x : x * v1 - y * v0);
+    x = x1;
+    y = y1;
+    z = z1;
+    w = w1;
+}
+
 /// The turn about the fixed world L at the rate |L| / i on plain numbers, not renormalised:
 /// (x, y, z, w) <- (cos x, sin x L / |L|) q, the factor in the world frame on the left, with the
 /// half angle x = |L| k, k = dt / (2 i). sin(x) / x and cos(x) from their series in x^2 (no square
@@ -139,17 +156,7 @@ template <bool series_only>
         }
     }
     const double f = k * sinc; // v = sin(x) L / |L| = f L
-    const double v0 = f * l0;
-    const double v1 = f * l1;
-    const double v2 = f * l2;
-    const double w1 = c * w - (v0 * x + v1 * y + v2 * z);
-    const double x1 = c * x + w * v0 + (v1 * z - v2 * y);
-    const double y1 = c * y + w * v1 + (v2 * x - v0 * z);
-    const double z1 = c * z + w * v2 + (v0 * y - v1 * x);
-    x = x1;
-    y = y1;
-    z = z1;
-    w = w1;
+    multiply_by<true>(c, f * l0, f * l1, f * l2, x, y, z, w);
 }
 
 /// (x, y, z, w) divided by its norm.
@@ -184,29 +191,11 @@ template <bool series_only>
                                                   double l0, double l1, double l2, double k,
                                                   double b, double e0, double e1, double e2) {
     turn_about_l<series_only>(x, y, z, w, l0, l1, l2, k);
-    double sinc = 1.0;
+    double s = 0.0;
     double c = 1.0;
-    sinc_cos_series(b * b, sinc, c);
-    double s = b * sinc;
-    if constexpr (!series_only) {
-        if (std::abs(b) > kSeriesLimit) {
-            s = std::sin(b);
-            c = std::cos(b);
-        }
-    }
-    // (w, v) (c, s e) = (c w - s v.e, c v + s w e + s v x e); e has one non-zero component, so
-    // v.e and v x e are exact.
-    const double u0 = s * e0;
-    const double u1 = s * e1;
-    const double u2 = s * e2;
-    const double w1 = c * w - (x * u0 + y * u1 + z * u2);
-    const double x1 = c * x + w * u0 + (y * u2 - z * u1);
-    const double y1 = c * y + w * u1 + (z * u0 - x * u2);
-    const double z1 = c * z + w * u2 + (x * u1 - y * u0);
-    x = x1;
-    y = y1;
-    z = z1;
-    w = w1;
+    sin_cos<series_only>(b, s, c);
+    // q (c, s e); e has one non-zero component, so the products with it are exact.
+    multiply_by<false>(c, s * e0, s * e1, s * e2, x, y, z, w);
     renormalise(x, y, z, w);
 }
 
@@ -282,7 +271,10 @@ void free_rotate_bodies(const std::uint32_t* index, std::size_t n, Quat* q, cons
     // Batch [b0, b0 + m) of `list` into the lanes: the quaternion, L (world frame for a spherical
     // or symmetric top, body frame for the splitting) and 1 / I (spherical: dt / (2 i) in
     // inv_i[0]; symmetric: symmetric_rates' k and b in inv_i[0] and inv_i[1], e_s in axis).
-    const auto load = [&](const std::uint32_t* list, std::size_t m, Kind kind) {
+    // `axes`: a symmetric top's axis per body of the list (symmetric_axis, taken where the bodies
+    // were sorted).
+    const auto load = [&](const std::uint32_t* list, std::size_t m, Kind kind,
+                          const int* axes = nullptr) {
         for (std::size_t b = 0; b < lanes; ++b) {
             if (b >= m) {
                 for (int c = 0; c < 3; ++c) {
@@ -301,7 +293,7 @@ void free_rotate_bodies(const std::uint32_t* index, std::size_t n, Quat* q, cons
             }
             qv[3][b] = q[i].w();
             if (kind == Kind::symmetric) {
-                const int s = symmetric_axis(inertia_principal[i]);
+                const int s = axes[b];
                 const SymmetricRates r =
                     symmetric_rates(inertia_principal[i], s, rot[i], L_world[i], dt);
                 for (int c = 0; c < 3; ++c) {
@@ -346,6 +338,7 @@ void free_rotate_bodies(const std::uint32_t* index, std::size_t n, Quat* q, cons
     for (std::size_t p0 = 0; p0 < n; p0 += piece) {
         std::uint32_t top[piece];
         std::uint32_t sym[piece];
+        int sym_axis[piece];
         std::uint32_t other[piece];
         std::size_t n_top = 0;
         std::size_t n_sym = 0;
@@ -354,7 +347,8 @@ void free_rotate_bodies(const std::uint32_t* index, std::size_t n, Quat* q, cons
             const std::uint32_t i = index[b];
             if (spherical_top(inertia_principal[i])) {
                 top[n_top++] = i;
-            } else if (symmetric_axis(inertia_principal[i]) >= 0) {
+            } else if (const int s = symmetric_axis(inertia_principal[i]); s >= 0) {
+                sym_axis[n_sym] = s;
                 sym[n_sym++] = i;
             } else {
                 other[n_other++] = i;
@@ -372,7 +366,7 @@ void free_rotate_bodies(const std::uint32_t* index, std::size_t n, Quat* q, cons
         }
         for (std::size_t b0 = 0; b0 < n_sym; b0 += lanes) {
             const std::size_t m = std::min(lanes, n_sym - b0);
-            load(sym + b0, m, Kind::symmetric);
+            load(sym + b0, m, Kind::symmetric, sym_axis + b0);
 #pragma omp simd
             for (std::size_t b = 0; b < lanes; ++b) {
                 symmetric_turn<true>(qv[0][b], qv[1][b], qv[2][b], qv[3][b], l[0][b], l[1][b],
