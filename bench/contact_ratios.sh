@@ -12,7 +12,9 @@
 # ratio over the sphere's fastest and slowest runs, and the ratio of the fastest runs (on a host
 # shared with other machines a run is only ever slowed down, so the fastest is the steadiest),
 # and a verdict: "yes" where both ratios are within 10x, "at the line" where the larger is within
-# 10.5x, "no" otherwise.
+# 10.5x, "no" otherwise, "no (floor)" where the shape's contact-free step alone (the same
+# particles spaced apart, spinning, no gravity: per-particle work only) costs as much as the
+# whole step that 10 sphere contacts per contact allow.
 #
 # Usage: bench/contact_ratios.sh [ROUNDS [KIND...]]  (default 3 rounds; kinds: every shape of the
 # seed: sphere, the clumps cylinder_12 and cylinder_36, the boxes cube, cuboid_6x6x5, plate_10x9x2
@@ -50,6 +52,15 @@ for r in $(seq 1 "$rounds"); do
             done
         done
     done
+    # The floor: the same shape's contact-free step (KILN_SCENE_FREE=1: per-particle work alone).
+    for k in "${kinds[@]}"; do
+        line=$(KILN_SCENE_FREE=1 "$bin" "$k" 100 4000 2>/dev/null) || {
+            echo "bench/contact_ratios.sh: kiln_scene_steps $k (contact-free) failed" >&2
+            exit 1
+        }
+        read -r _ _ ms _ <<<"$line"
+        echo "$r floor $k $ms 0 0" >>"$out"
+    done
     echo "# round $r of $rounds done, load $(cut -d' ' -f1 /proc/loadavg)" >&2
 done
 
@@ -79,10 +90,16 @@ def verdict(median_ratio, fastest_ratio):
     return "no"
 
 
+# The last two columns: the budget, the step that 10 sphere contacts per contact allow
+# (10 x the sphere's median ns per contact x the shape's contacts per step), and the floor, the
+# median step of the same shape without any contact (kiln_scene_steps with KILN_SCENE_FREE=1:
+# the kicks, the drift, the rotation, the walls' tests and the list, per particle). Where the
+# floor reaches the budget, no narrow phase and no contact law, however fast, can bring the shape
+# within 10x: the verdict says "no (floor)"; the per-particle work has to fall first.
 print("| phase | shape | contacts per particle | us per step | ns per contact: median (range) "
       "| x a sphere contact (range) | fastest / sphere's fastest | x a sphere per step "
-      "| within 10x |")
-print("|---|---|---|---|---|---|---|---|---|")
+      "| within 10x | budget at 10x, us per step | contact-free floor, us per step |")
+print("|---|---|---|---|---|---|---|---|---|---|---|")
 for phase in ("collapse", "settled"):
     ref_runs = [v[0] for v in rows[(phase, "sphere")]]
     ref = statistics.median(ref_runs)
@@ -92,10 +109,19 @@ for phase in ("collapse", "settled"):
         ns = [x[0] for x in v]
         med = statistics.median(ns)
         step = statistics.median(x[2] for x in v)
-        print(f"| {phase} | {kind} | {statistics.median(x[1] for x in v):.2f} "
+        cpp = statistics.median(x[1] for x in v)
+        # contacts per step = cpp x particles; particles = step / (ns per contact x cpp), the
+        # same 343 in every scene, taken from the shape's own median run
+        contacts = 1e6 * step / med if med > 0 else 0.0
+        budget = 10.0 * ref * contacts / 1e3  # us
+        floor = 1e3 * statistics.median(x[2] for x in rows[("floor", kind)])
+        word = verdict(med / ref, min(ns) / min(ref_runs))
+        if word != "yes" and floor >= budget:
+            word = "no (floor)"
+        print(f"| {phase} | {kind} | {cpp:.2f} "
               f"| {1e3 * step:.1f} "
               f"| {med:.1f} ({min(ns):.1f}-{max(ns):.1f}) | {med / ref:.1f} "
               f"({med / max(ref_runs):.1f}-{med / min(ref_runs):.1f}) "
               f"| {min(ns) / min(ref_runs):.1f} | {step / ref_step:.1f} "
-              f"| {verdict(med / ref, min(ns) / min(ref_runs))} |")
+              f"| {word} | {budget:.1f} | {floor:.1f} |")
 EOF

@@ -16,9 +16,10 @@ namespace kiln::bench {
 
 /// The scene: material "pom" (E = 5e7 Pa, nu = 0.35, 1380 kg/m^3, e = 0.5, mu = 0.3), dt = 5e-6 s,
 /// one thread, random orientations; particles of template `shape`, or spheres of radius
-/// `sphere_radius` (m) when there is none. The lattice spacing is 1.02 bounding diameters.
+/// `sphere_radius` (m) when there is none. The lattice spacing is `spacing` bounding diameters
+/// (1.02 unless given).
 inline dynamics::SceneSpec lattice_box_scene(const std::optional<geometry::ShapeTemplate>& shape,
-                                             double sphere_radius = 0.0) {
+                                             double sphere_radius = 0.0, double spacing = 1.02) {
     using dynamics::InsertSpec;
     using dynamics::PlaneWall;
     dynamics::SceneSpec s;
@@ -37,7 +38,7 @@ inline dynamics::SceneSpec lattice_box_scene(const std::optional<geometry::Shape
     } else {
         ins.size.radius = sphere_radius;
     }
-    const double a = 2.0 * ins.size.radius * 1.02;
+    const double a = 2.0 * ins.size.radius * spacing;
     ins.spacing = a;
     const Vec3 hi(7 * a + 1e-4, 7 * a + 1e-4, 7 * a + 1e-4);
     ins.region = {Vec3::Zero(), hi};

@@ -12,6 +12,9 @@
 // sq03 (superquadrics of e = 0.8, 0.3) or a shipped shape name (cube, icosahedron, cylinder_16,
 // cylinder_12, ...).
 //
+// KILN_SCENE_FREE=1: the contact-free variant of the scene (free_scene below), whose step is the
+// per-particle work alone: the floor under any step of that shape.
+//
 // KILN_AB=SWITCH: an A/B of one of System's switches (memo, separation and member_lanes keep the
 // bits; box_lanes and convex_blocks change them at round-off, so their two runs part) inside one
 // process, which a shared host's noise cannot tilt: two systems from the same start, the second
@@ -48,18 +51,36 @@ double wall_seconds() {
     return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
-kiln::dynamics::SceneSpec scene(const std::string& kind) {
+/// The lattice scene of `kind`, its lattice spaced by `spacing` bounding diameters.
+kiln::dynamics::SceneSpec scene(const std::string& kind, double spacing) {
     if (kind == "sphere") {
-        return kiln::bench::lattice_box_scene(std::nullopt, 3.3e-3); // bench_bodies kind 0
+        return kiln::bench::lattice_box_scene(std::nullopt, 3.3e-3, spacing); // bench_bodies 0
     }
     if (kind == "sq08" || kind == "sq03") {
         kiln::geometry::Superquadric q;
         q.half_axes = kiln::Vec3::Constant(3e-3);
         q.e1 = q.e2 = kind == "sq08" ? 0.8 : 0.3;
-        return kiln::bench::lattice_box_scene(kiln::geometry::make_template("sq", q));
+        return kiln::bench::lattice_box_scene(kiln::geometry::make_template("sq", q), 0.0, spacing);
     }
     return kiln::bench::lattice_box_scene(
-        kiln::io::read_shape_file(kiln::io::find_shape_file(kind, kiln::io::default_shape_dirs())));
+        kiln::io::read_shape_file(kiln::io::find_shape_file(kind, kiln::io::default_shape_dirs())),
+        0.0, spacing);
+}
+
+/// The contact-free variant (KILN_SCENE_FREE=1): the same particles, walls and step, with the
+/// lattice spaced by 1.5 bounding diameters, no gravity and no translation, every particle
+/// spinning at 40 rad/s about a fixed world axis from its random orientation. Nothing touches
+/// and no pair comes within its bounding spheres, so a step is the per-particle work alone
+/// (kicks, drift, the rotation, the walls' tests, the neighbour list's entries): the least any
+/// step of that shape costs, whatever its contacts cost.
+kiln::dynamics::SceneSpec free_scene(const std::string& kind) {
+    kiln::dynamics::SceneSpec spec = scene(kind, 1.5);
+    spec.gravity = kiln::Vec3::Zero();
+    for (auto& ins : spec.inserts) {
+        ins.velocity = kiln::Vec3::Zero();
+        ins.omega = kiln::Vec3(24.0, 24.0, 21.0); // |omega| = 40.0 rad/s (world)
+    }
+    return spec;
 }
 
 /// Turns switch `name` of `sys` on or off; false for an unknown name.
@@ -131,7 +152,9 @@ int main(int argc, char** argv) {
     const std::string kind = argv[1];
     const int warmup = std::atoi(argv[2]);
     const int steps = std::atoi(argv[3]);
-    kiln::dynamics::SceneSpec spec = scene(kind);
+    const char* free_env = std::getenv("KILN_SCENE_FREE");
+    const bool free = free_env != nullptr && std::string(free_env) == "1";
+    kiln::dynamics::SceneSpec spec = free ? free_scene(kind) : scene(kind, 1.02);
     if (const char* threads = std::getenv("KILN_SCENE_THREADS"); threads != nullptr) {
         spec.threads = std::max(1, std::atoi(threads));
     }
