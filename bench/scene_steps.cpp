@@ -192,8 +192,10 @@ int main(int argc, char** argv) {
                 contacts > 0 ? 1e9 * t / static_cast<double>(contacts) : 0.0, checksum,
                 1e3 * w / steps);
     const auto& memo = kiln::geometry::plane_memo_counters();
-    std::fprintf(stderr, "plane memo: %ld queries tried it, %ld answered, %ld refills\n",
-                 memo.tried, memo.answered, memo.refills);
+    std::fprintf(stderr,
+                 "plane memo: %ld queries tried it, %ld answered (%ld certified by the overlap "
+                 "held), %ld refills\n",
+                 memo.tried, memo.answered, memo.held, memo.refills);
     std::fprintf(stderr, "element pairs queried %ld, proved apart by a cached direction %ld\n",
                  sys.narrow_phase_counters().calls, sys.separation_skips());
     std::fprintf(stderr, "box pairs in lanes %ld\n", sys.box_lane_pairs());

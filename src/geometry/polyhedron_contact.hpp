@@ -270,6 +270,13 @@ struct PlaneMemo {
     Vec3 shift = Vec3::Zero();              ///< B's centre in A's frame (m), stored pose
     Vec3 shift_in_b = Vec3::Zero();         ///< rot^T shift (m): A's centre is -this in B's frame
     double answer = 0.0;                    ///< largest separation (m, < 0: overlap), stored pose
+    /// The pose and answer of the last query the memory or the full search answered (the stored
+    /// pose after a refill): the overlap held since then certifies overlap while the relative
+    /// motion since stays below it (polyhedron_memo.cpp, memo_search).
+    Mat3 last_rot = Mat3::Identity();
+    Vec3 last_shift = Vec3::Zero();
+    Vec3 last_shift_in_b = Vec3::Zero();
+    double last_answer = 0.0;
     /// Stored values (m), one block: the separation along each face of A, then of B; then per
     /// feature edge of A, then of B, a lower bound of its distance from the other body (the larger
     /// of its distance beyond one of the other's face planes, both ends, and beyond the other's
@@ -338,6 +345,9 @@ struct PlaneMemoCounters {
     /// Of the answered, those whose plane is a face the memory did not list among its first
     /// (PlaneMemo::top_a, top_b): found among the rest.
     long unlisted = 0;
+    /// Of the answered, those whose overlap the overlap held since the last query certified
+    /// (PlaneMemo::last_answer), with no vertex or edge tested.
+    long held = 0;
 };
 /// This thread's counters (mutable, for resetting).
 PlaneMemoCounters& plane_memo_counters();

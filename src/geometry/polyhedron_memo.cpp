@@ -34,6 +34,10 @@ constexpr double kMemoTolerance = 1e-9;
 /// session 27, against 0.01 before: 1-3 % faster for icosahedra and `cylinder_16`, 0.3 slower).
 constexpr double kMemoDrift = 0.1;
 
+/// 1 / sqrt(2): the spectral norm of the difference of two rotation matrices over its Frobenius
+/// norm.
+constexpr double kSpectralOverFrobenius = 0.70710678118654752;
+
 thread_local PlaneMemoCounters memo_counters;
 
 /// The largest over k < n of min(d0[k], d1[k]), in four running maxima (the largest of a set does
@@ -303,6 +307,10 @@ void refill_memo(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, con
     memo.shift = r.shift;
     memo.shift_in_b = r.rot.transpose() * r.shift;
     memo.answer = best;
+    memo.last_rot = memo.rot;
+    memo.last_shift = memo.shift;
+    memo.last_shift_in_b = memo.shift_in_b;
+    memo.last_answer = best;
 }
 
 /// The common plane from the memory (see PlaneMemo), after make_relative: true with best, best_m
@@ -331,8 +339,8 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
     const double tol = kMemoTolerance * scale;
     const double turn = (r.rot - memo.rot).norm();
     const double drift_b = turn * fb.radius + (r.shift - memo.shift).norm();
-    const double drift_a =
-        turn * fa.radius + (r.rot.transpose() * r.shift - memo.shift_in_b).norm();
+    const Vec3 shift_in_b = r.rot.transpose() * r.shift;
+    const double drift_a = turn * fa.radius + (shift_in_b - memo.shift_in_b).norm();
     if (!(std::max(drift_a, drift_b) <= kMemoDrift * scale)) {
         return false;
     }
@@ -417,10 +425,30 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
     // The certificate of overlap: the stored vertex, else a kept edge crossing the other body
     // (edge_crosses as the full search calls it: a crossing edge passes within the reach of the
     // other body, so the full prune keeps it too, and the same expression gives the same answer).
-    if (!memo_inside(fa, fb, r, memo.inside, tol) && !memo_crossing(fa, fb, r, memo)) {
+    // The overlap held since the last query certifies overlap now while the relative motion since
+    // stays below it: the largest separation over all directions (the answer, < 0 when the bodies
+    // overlap) moves by at most the largest motion of a vertex relative to the other body, as
+    // every separation along a fixed direction does. So last_answer + motion < -tol means the
+    // bodies overlap now by more than tol, and then the full search finds its certificate (the
+    // intersection's vertices are vertices inside the other body or edges crossing it) and takes
+    // the same path. The motion as drift_a and drift_b, with the rotation's spectral norm: for
+    // two rotation matrices ||R1 - R0||_2 = ||R1 - R0||_F / sqrt(2) (both are 2 sin(theta / 2)
+    // times 1 and sqrt(2)), to the round-off of R's orthogonality (1e-16), which tol covers.
+    // Otherwise the certificates are tested: a vertex inside, an edge crossing.
+    const double turn_last = (r.rot - memo.last_rot).norm() * kSpectralOverFrobenius;
+    const double moved =
+        std::min(turn_last * fb.radius + (r.shift - memo.last_shift).norm(),
+                 turn_last * fa.radius + (shift_in_b - memo.last_shift_in_b).norm());
+    const bool held = memo.last_answer + moved < -tol;
+    if (!held && !memo_inside(fa, fb, r, memo.inside, tol) && !memo_crossing(fa, fb, r, memo)) {
         return false;
     }
+    memo.last_rot = r.rot;
+    memo.last_shift = r.shift;
+    memo.last_shift_in_b = shift_in_b;
+    memo.last_answer = best;
     ++memo_counters.answered;
+    memo_counters.held += held ? 1 : 0;
     if (c.feature != CommonPlaneFeature::kEdgeEdge && face >= 0) {
         const bool of_a = static_cast<std::size_t>(face) < nfa;
         const auto& top_list = of_a ? memo.top_a : memo.top_b;

@@ -946,26 +946,32 @@ MemoryRun memory_trajectories(int listed, bool scramble) {
     g::detail::memo_listed_faces() = listed_before;
     const g::PlaneMemoCounters& after = g::plane_memo_counters();
     std::printf("%d faces listed: %d touching, memory tried %ld, answered %ld (%ld on a face "
-                "beyond its list), refilled %ld\n",
+                "beyond its list, %ld certified by the overlap held), refilled %ld\n",
                 listed, touching, after.tried - before.tried, after.answered - before.answered,
-                after.unlisted - before.unlisted, after.refills - before.refills);
+                after.unlisted - before.unlisted, after.held - before.held,
+                after.refills - before.refills);
     EXPECT_GT(touching, 10000);
     return {{after.tried - before.tried, after.answered - before.answered,
-             after.refills - before.refills, after.unlisted - before.unlisted},
+             after.refills - before.refills, after.unlisted - before.unlisted,
+             after.held - before.held},
             touching};
 }
 
 TEST(PolyhedronContact, MemoryChangesNoBit) {
     const MemoryRun run = memory_trajectories(g::PlaneMemo::kTopFaces, true);
     const g::PlaneMemoCounters& n = run.n;
-    // The memory's route is exercised, not only the fallback.
+    // The memory's route is exercised, not only the fallback; and both of its certificates of
+    // overlap: the overlap held since the last query, and a vertex or an edge tested.
     EXPECT_GT(n.answered, run.touching / 2);
+    EXPECT_GT(n.held, n.answered / 10);
+    EXPECT_GT(n.answered - n.held, 500);
     // Whether the memory answers or hands over to the full search (its certificates of overlap
     // read B's planes too) does not depend on what the scratch held before either.
     const g::PlaneMemoCounters fresh = memory_trajectories(g::PlaneMemo::kTopFaces, false).n;
     EXPECT_EQ(n.tried, fresh.tried);
     EXPECT_EQ(n.answered, fresh.answered);
     EXPECT_EQ(n.refills, fresh.refills);
+    EXPECT_EQ(n.held, fresh.held);
 }
 
 TEST(PolyhedronContact, MemoryWithAShortListChangesNoBit) {
