@@ -16,6 +16,10 @@
 #include <utility>
 #include <vector>
 
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
+
 namespace kiln::geometry {
 
 namespace {
@@ -87,6 +91,35 @@ void rank_faces(const double* stored, std::size_t nf, std::array<int, PlaneMemo:
     }
     rest = nf > length ? stored[static_cast<std::size_t>(order[length])]
                        : -std::numeric_limits<double>::infinity();
+}
+
+/// Bit e set for each of the n <= 64 stored values not above bar (NaN included): the edges the
+/// prune keeps. With AVX-512, eight comparisons at a time into a mask register: the loop of one
+/// comparison and shift per edge was 3 % of a settled icosahedron step (docs/performance.md,
+/// "Session 36").
+std::uint64_t kept_mask(const double* stored, std::size_t n, double bar) {
+#if defined(__AVX512F__)
+    const __m512d b = _mm512_set1_pd(bar);
+    std::uint64_t mask = 0;
+    std::size_t e = 0;
+    for (; e + 8 <= n; e += 8) {
+        const __mmask8 m = _mm512_cmp_pd_mask(_mm512_loadu_pd(stored + e), b, _CMP_NGT_UQ);
+        mask |= static_cast<std::uint64_t>(m) << e;
+    }
+    if (e < n) {
+        const auto tail = static_cast<__mmask8>((1U << (n - e)) - 1U);
+        const __mmask8 m =
+            _mm512_mask_cmp_pd_mask(tail, _mm512_maskz_loadu_pd(tail, stored + e), b, _CMP_NGT_UQ);
+        mask |= static_cast<std::uint64_t>(m) << e;
+    }
+    return mask;
+#else
+    std::uint64_t mask = 0;
+    for (std::size_t e = 0; e < n; ++e) {
+        mask |= static_cast<std::uint64_t>(!(stored[e] > bar)) << e;
+    }
+    return mask;
+#endif
 }
 
 /// Separation (m) along the face plane (n, o) of one body: the smallest n . v - o over the
@@ -394,10 +427,7 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
     // ones listed in order: appending at a running count made every comparison wait for the last.
     const auto keep = [](const double* stored, std::size_t n, double bar, std::vector<int>& kept) {
         if (n <= 64) {
-            std::uint64_t mask = 0;
-            for (std::size_t e = 0; e < n; ++e) {
-                mask |= static_cast<std::uint64_t>(!(stored[e] > bar)) << e;
-            }
+            std::uint64_t mask = kept_mask(stored, n, bar);
             kept.clear();
             for (; mask != 0; mask &= mask - 1) {
                 kept.push_back(std::countr_zero(mask));
