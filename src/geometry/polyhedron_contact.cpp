@@ -261,6 +261,13 @@ PolyhedronFeatures polyhedron_features(const ConvexPolyhedron& p) {
             f.edges.push_back({e[0], e[1], g0, g1});
         }
     }
+    f.edge_arcs.reserve(f.edges.size());
+    for (const auto& e : f.edges) {
+        const Vec3& n0 = f.face_normals[static_cast<std::size_t>(e[2])];
+        const Vec3& n1 = f.face_normals[static_cast<std::size_t>(e[3])];
+        const Vec3& v0 = f.vertices[static_cast<std::size_t>(e[0])];
+        f.edge_arcs.push_back({n1.cross(n0), f.vertices[static_cast<std::size_t>(e[1])] - v0});
+    }
     f.box = box_with_corners(f);
     return f;
 }
@@ -622,9 +629,9 @@ void edge_stage(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, cons
         const auto& ea = fa.edges[static_cast<std::size_t>(ia)];
         const Vec3& na0 = fa.face_normals[static_cast<std::size_t>(ea[2])];
         const Vec3& na1 = fa.face_normals[static_cast<std::size_t>(ea[3])];
-        const Vec3 bxa = na1.cross(na0);
+        const Vec3& bxa = fa.edge_arcs[static_cast<std::size_t>(ia)][0]; // na1 x na0
         const Vec3& pa = fa.vertices[static_cast<std::size_t>(ea[0])];
-        const Vec3 da = fa.vertices[static_cast<std::size_t>(ea[1])] - pa;
+        const Vec3& da = fa.edge_arcs[static_cast<std::size_t>(ia)][1]; // v1 - v0
         for (const int ib : r.edges_b) {
             const auto k = static_cast<std::size_t>(ib);
             const auto& arc = r.arcs[k];

@@ -45,8 +45,11 @@ struct PolyhedronFeatures {
     std::vector<Vec3> face_normals;        ///< outward unit normal of each planar face, body frame
     std::vector<double> face_offsets;      ///< n . x on each face plane (m), body frame
     std::vector<std::array<int, 4>> edges; ///< feature edges: vertices v0, v1, faces f0, f1
-    double radius = 0.0;                   ///< distance of the farthest vertex from the origin (m)
-    double inradius = 0.0;                 ///< smallest face offset (m): the inscribed radius
+    /// Per feature edge, its Gauss-map arc's n1 x n0 (the normals of faces f1 and f0) and its
+    /// vector v1 - v0 (m), body frame: the edge-edge stage reads them for A's edges at every query.
+    std::vector<std::array<Vec3, 2>> edge_arcs;
+    double radius = 0.0;   ///< distance of the farthest vertex from the origin (m)
+    double inradius = 0.0; ///< smallest face offset (m): the inscribed radius
     /// Volume-equivalent sphere radius (m), kept so the step loop does not take a cube root per
     /// body and step.
     double r_equiv = 0.0;
