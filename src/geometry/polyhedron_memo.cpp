@@ -452,19 +452,18 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
     if (!(best < -tol) || !(second < best - tol)) {
         return false;
     }
-    // The certificate of overlap: the stored vertex, else a kept edge crossing the other body
-    // (edge_crosses as the full search calls it: a crossing edge passes within the reach of the
-    // other body, so the full prune keeps it too, and the same expression gives the same answer).
-    // The overlap held since the last query certifies overlap now while the relative motion since
-    // stays below it: the largest separation over all directions (the answer, < 0 when the bodies
-    // overlap) moves by at most the largest motion of a vertex relative to the other body, as
-    // every separation along a fixed direction does. So last_answer + motion < -tol means the
-    // bodies overlap now by more than tol, and then the full search finds its certificate (the
-    // intersection's vertices are vertices inside the other body or edges crossing it) and takes
-    // the same path. The motion as drift_a and drift_b, with the rotation's spectral norm: for
-    // two rotation matrices ||R1 - R0||_2 = ||R1 - R0||_F / sqrt(2) (both are 2 sin(theta / 2)
-    // times 1 and sqrt(2)), to the round-off of R's orthogonality (1e-16), which tol covers.
-    // Otherwise the certificates are tested: a vertex inside, an edge crossing.
+    // The certificate of overlap. First the overlap held since the last query: the largest
+    // separation over all directions (the answer, < 0 when the bodies overlap) moves by at most
+    // the largest motion of a vertex relative to the other body, as every separation along a
+    // fixed direction does. So last_answer + motion < -tol means the bodies overlap now by more
+    // than tol, and then the full search finds its certificate (the intersection's vertices are
+    // vertices inside the other body or edges crossing it) and takes the same path. The motion as
+    // drift_a and drift_b, with the rotation's spectral norm: for two rotation matrices
+    // ||R1 - R0||_2 = ||R1 - R0||_F / sqrt(2) (2 sin(theta / 2) against 2 sqrt(2) sin(theta / 2)),
+    // to the round-off of R's orthogonality (1e-16), which tol covers. Otherwise the stored
+    // vertex inside the other body, else a kept edge crossing it (edge_crosses as the full search
+    // calls it: a crossing edge passes within the reach of the other body, so the full prune
+    // keeps it too, and the same expression gives the same answer).
     const double turn_last = (r.rot - memo.last_rot).norm() * kSpectralOverFrobenius;
     const double moved =
         std::min(turn_last * fb.radius + (r.shift - memo.last_shift).norm(),
