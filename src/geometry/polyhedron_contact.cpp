@@ -352,9 +352,12 @@ bool is_minkowski_face(const Vec3& a, const Vec3& b, const Vec3& bxa, const Vec3
                        const Vec3& dxc) {
     const double cba = c.dot(bxa);
     const double dba = d.dot(bxa);
+    if (!(cba * dba < 0.0)) {
+        return false; // B's arc on one side of A's great circle: most pairs end here
+    }
     const double adc = a.dot(dxc);
     const double bdc = b.dot(dxc);
-    return cba * dba < 0.0 && adc * bdc < 0.0 && cba * bdc > 0.0;
+    return adc * bdc < 0.0 && cba * bdc > 0.0;
 }
 
 /// Edges of a body (vertices and distances beyond the other body's face planes in `t`, its
