@@ -974,6 +974,53 @@ TEST(PolyhedronContact, MemoryChangesNoBit) {
     EXPECT_EQ(n.held, fresh.held);
 }
 
+TEST(PolyhedronContact, MemoryFollowsPairsPullingApart) {
+    // Resting pairs pulled apart along their normal in steps of a tenth of the starting overlap,
+    // with a small turn each step, until they part: every answer of the memory is the full
+    // search's bit for bit, most of them certified by the overlap held since the last one
+    // (PlaneMemo::last_answer), and none has the pair touching once the full search has it apart.
+    // (Pulled along the normal, a face plane separates the parted pairs, which the memory's face
+    // stage sees before any certificate; a certificate that held too long is caught by the random
+    // trajectories of MemoryChangesNoBit, where it fails.)
+    std::mt19937_64 rng(61);
+    std::vector<g::PolyhedronFeatures> shapes;
+    for (const std::string name : {"icosahedron", "cylinder_16", "pyramid"}) {
+        shapes.push_back(load(name));
+    }
+    const g::PlaneMemoCounters before = g::plane_memo_counters();
+    int parted = 0;
+    for (const g::PolyhedronFeatures& fa : shapes) {
+        for (const g::PolyhedronFeatures& fb : shapes) {
+            for (int n = 0; n < 8; ++n) {
+                RandomPair p = random_pair(fa, fb, rng);
+                const g::PatchTest need = [](const g::PolyhedronContact&) { return false; };
+                const g::PolyhedronContact start = g::polyhedron_contact(p.a, p.b, need);
+                ASSERT_TRUE(start.touching);
+                const double step = 0.1 * start.depth;
+                g::PlaneMemo memo;
+                static_cast<void>(g::polyhedron_contact(p.a, p.b, need, memo)); // fills it
+                for (int t = 0; t < 40; ++t) {
+                    p.b.x -= step * start.normal; // along the normal from B to A: apart
+                    p.b.q = (small_turn(1e-3 * step / fb.radius, rng) * p.b.q).normalized();
+                    const g::PolyhedronContact full = g::polyhedron_contact(p.a, p.b, need);
+                    const g::PolyhedronContact mem = g::polyhedron_contact(p.a, p.b, need, memo);
+                    expect_same_answer(mem, full);
+                    if (!full.touching) {
+                        EXPECT_FALSE(mem.touching);
+                        ++parted;
+                        break;
+                    }
+                }
+            }
+        }
+    }
+    const g::PlaneMemoCounters& after = g::plane_memo_counters();
+    std::printf("%d pairs parted; memory answered %ld, %ld certified by the overlap held\n", parted,
+                after.answered - before.answered, after.held - before.held);
+    EXPECT_EQ(parted, 72);
+    EXPECT_GT(after.held - before.held, 72 * 4);
+}
+
 TEST(PolyhedronContact, MemoryWithAShortListChangesNoBit) {
     // The memory lists the faces of the largest stored separations first and searches the others
     // only when their bound reaches the answer; with the default list the plane is almost always
