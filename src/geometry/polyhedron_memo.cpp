@@ -370,10 +370,20 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
     ++memo_counters.tried;
     const double scale = fa.radius + fb.radius;
     const double tol = kMemoTolerance * scale;
-    const double turn = (r.rot - memo.rot).norm();
-    const double drift_b = turn * fb.radius + (r.shift - memo.shift).norm();
     const Vec3 shift_in_b = r.rot.transpose() * r.shift;
-    const double drift_a = turn * fa.radius + (shift_in_b - memo.shift_in_b).norm();
+    // Bounds of the motion since the pose (rot0, shift0, shift_in_b0): of A's vertices in B's
+    // frame (first) and of B's in A's (second), the rotation's change by its Frobenius norm times
+    // `norm_factor` (at least its spectral norm) times the other body's bounding radius, plus the
+    // centre's shift.
+    const auto motion = [&](const Mat3& rot0, const Vec3& shift0, const Vec3& shift_in_b0,
+                            double norm_factor) {
+        const double turn = (r.rot - rot0).norm() * norm_factor;
+        return std::pair{turn * fa.radius + (shift_in_b - shift_in_b0).norm(),
+                         turn * fb.radius + (r.shift - shift0).norm()};
+    };
+    const auto drift = motion(memo.rot, memo.shift, memo.shift_in_b, 1.0);
+    const double drift_a = drift.first;
+    const double drift_b = drift.second;
     if (!(std::max(drift_a, drift_b) <= kMemoDrift * scale)) {
         return false;
     }
@@ -464,11 +474,9 @@ bool memo_search(const PolyhedronFeatures& fa, const PolyhedronFeatures& fb, Rel
     // vertex inside the other body, else a kept edge crossing it (edge_crosses as the full search
     // calls it: a crossing edge passes within the reach of the other body, so the full prune
     // keeps it too, and the same expression gives the same answer).
-    const double turn_last = (r.rot - memo.last_rot).norm() * kSpectralOverFrobenius;
-    const double moved =
-        std::min(turn_last * fb.radius + (r.shift - memo.last_shift).norm(),
-                 turn_last * fa.radius + (shift_in_b - memo.last_shift_in_b).norm());
-    const bool held = memo.last_answer + moved < -tol;
+    const auto moved =
+        motion(memo.last_rot, memo.last_shift, memo.last_shift_in_b, kSpectralOverFrobenius);
+    const bool held = memo.last_answer + std::min(moved.first, moved.second) < -tol;
     if (!held && !memo_inside(fa, fb, r, memo.inside, tol) && !memo_crossing(fa, fb, r, memo)) {
         return false;
     }
