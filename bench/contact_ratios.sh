@@ -25,7 +25,9 @@
 # and plate_inv4, the polyhedra pyramid, icosahedron, cylinder_8 and cylinder_16 (the seed's
 # prisms of 8 and 16 edges, Inv. II); any shipped shape name or
 # sq08/sq03 works). Needs a Release build with benchmarks (scripts/setup.sh), or
-# KILN_SCENE_STEPS pointing at a kiln_scene_steps binary. Figures: docs/performance.md.
+# KILN_SCENE_STEPS pointing at a kiln_scene_steps binary. KILN_RATIOS_PLOT=FILE.png also draws the
+# ratios (python3-matplotlib): per shape and phase the median ratio with its range, the 10x line,
+# and what the contact-free floor alone would give. Figures: docs/performance.md.
 set -euo pipefail
 script=bench/contact_ratios.sh
 default_rounds=3
@@ -68,7 +70,10 @@ for r in $(seq 1 "$rounds"); do
     echo "# round $r of $rounds done, load $(cut -d' ' -f1 /proc/loadavg)" >&2
 done
 
-python3 - "$out" <<'EOF'
+# Debian's interpreter (it has python3-matplotlib from scripts/setup.sh), else the first on PATH.
+py=/usr/bin/python3
+[[ -x $py ]] || py=python3
+"$py" - "$out" "${KILN_RATIOS_PLOT:-}" <<'EOF'
 import collections
 import statistics
 import sys
@@ -100,6 +105,7 @@ def verdict(median_ratio, fastest_ratio):
 # the kicks, the drift, the rotation, the walls' tests and the list, per particle). Where the
 # floor reaches the budget, no narrow phase and no contact law, however fast, can bring the shape
 # within 10x: the verdict says "no (floor)"; the per-particle work has to fall first.
+plotted = {}
 print("| phase | shape | contacts per particle | us per step | ns per contact: median (range) "
       "| x a sphere contact (range) | fastest / sphere's fastest | x a sphere per step "
       "| within 10x | budget at 10x, us per step | contact-free floor, us per step "
@@ -113,6 +119,7 @@ for phase in ("collapse", "settled"):
     ref_contacts = 1e6 * ref_step / ref if ref > 0 else 0.0
     # ns per contact of the sphere's step less its floor
     ref_own = 1e6 * (ref_step - ref_floor) / ref_contacts if ref_contacts > 0 else 0.0
+    plotted[phase] = []
     for kind in order:
         v = rows[(phase, kind)]
         ns = [x[0] for x in v]
@@ -129,10 +136,48 @@ for phase in ("collapse", "settled"):
             word = "no (floor)"
         own = 1e3 * (1e3 * step - floor) / contacts if contacts > 0 else 0.0
         own_ratio = f"{own / ref_own:.1f}" if ref_own > 0 else "-"
+        # the ratio the floor alone would give (contacts costing nothing)
+        floor_ratio = 1e3 * floor / contacts / ref if contacts > 0 else 0.0
+        plotted[phase].append((kind, med / ref, med / max(ref_runs), med / min(ref_runs),
+                               floor_ratio))
         print(f"| {phase} | {kind} | {cpp:.2f} "
               f"| {1e3 * step:.1f} "
               f"| {med:.1f} ({min(ns):.1f}-{max(ns):.1f}) | {med / ref:.1f} "
               f"({med / max(ref_runs):.1f}-{med / min(ref_runs):.1f}) "
               f"| {min(ns) / min(ref_runs):.1f} | {step / ref_step:.1f} "
               f"| {word} | {budget:.1f} | {floor:.1f} | {own_ratio} |")
+
+if len(sys.argv) > 2 and sys.argv[2]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import matplotlib.ticker
+
+    shapes = [k for k, *_ in plotted["collapse"] if k != "sphere"]
+    fig, ax = plt.subplots(figsize=(8, 0.55 * len(shapes) + 2.0))
+    for offset, phase, colour in ((-0.18, "collapse", "tab:orange"), (0.18, "settled", "tab:blue")):
+        by_kind = {k: v for k, *v in plotted[phase]}
+        y = [i + offset for i in range(len(shapes))]
+        mid = [by_kind[k][0] for k in shapes]
+        lo = [by_kind[k][0] - by_kind[k][1] for k in shapes]
+        hi = [by_kind[k][2] - by_kind[k][0] for k in shapes]
+        ax.barh(y, mid, height=0.34, color=colour, alpha=0.8, label=f"{phase}: median (range)")
+        ax.errorbar(mid, y, xerr=[lo, hi], fmt="none", ecolor="k", elinewidth=0.8, capsize=2)
+        ax.scatter([by_kind[k][3] for k in shapes], y, marker="|", s=120, color="k", zorder=3,
+                   label="contact-free step alone" if phase == "settled" else None)
+    ax.axvline(10.0, color="crimson", lw=1.5, label="target: 10x")
+    ax.set_xscale("log")
+    ax.set_xlim(0.5, 100)
+    ax.xaxis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%g"))
+    ax.set_yticks(range(len(shapes)))
+    ax.set_yticklabels(shapes)
+    ax.invert_yaxis()
+    ax.set_xlabel("cost per contact, x a sphere contact in the same phase (whole step / contacts)")
+    ax.set_title("kiln cost per contact by shape (bench/contact_ratios.sh)", fontsize=10)
+    ax.grid(axis="x", which="both", alpha=0.3)
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.11), ncol=2)
+    fig.tight_layout()
+    fig.savefig(sys.argv[2], dpi=110)
+    print(f"(plot: {sys.argv[2]})")
 EOF
