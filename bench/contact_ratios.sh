@@ -105,6 +105,22 @@ def verdict(median_ratio, fastest_ratio):
 # the kicks, the drift, the rotation, the walls' tests and the list, per particle). Where the
 # floor reaches the budget, no narrow phase and no contact law, however fast, can bring the shape
 # within 10x: the verdict says "no (floor)"; the per-particle work has to fall first.
+def contacts_per_step(step_ms, ns_per_contact):
+    """Contacts per step of a run: its step over its cost per contact (the same 343 particles in
+    every scene)."""
+    return 1e6 * step_ms / ns_per_contact if ns_per_contact > 0 else 0.0
+
+
+def own_ns(step_ms, floor_ms, contacts):
+    """ns per contact of the step less its contact-free floor (the contacts' own share)."""
+    return 1e6 * (step_ms - floor_ms) / contacts if contacts > 0 else 0.0
+
+
+def median_floor(kind):
+    """The median contact-free step of `kind` (ms)."""
+    return statistics.median(x[2] for x in rows[("floor", kind)])
+
+
 plotted = {}
 print("| phase | shape | contacts per particle | us per step | ns per contact: median (range) "
       "| x a sphere contact (range) | fastest / sphere's fastest | x a sphere per step "
@@ -115,10 +131,7 @@ for phase in ("collapse", "settled"):
     ref_runs = [v[0] for v in rows[(phase, "sphere")]]
     ref = statistics.median(ref_runs)
     ref_step = statistics.median(x[2] for x in rows[(phase, "sphere")])
-    ref_floor = statistics.median(x[2] for x in rows[("floor", "sphere")])
-    ref_contacts = 1e6 * ref_step / ref if ref > 0 else 0.0
-    # ns per contact of the sphere's step less its floor
-    ref_own = 1e6 * (ref_step - ref_floor) / ref_contacts if ref_contacts > 0 else 0.0
+    ref_own = own_ns(ref_step, median_floor("sphere"), contacts_per_step(ref_step, ref))
     plotted[phase] = []
     for kind in order:
         v = rows[(phase, kind)]
@@ -126,15 +139,14 @@ for phase in ("collapse", "settled"):
         med = statistics.median(ns)
         step = statistics.median(x[2] for x in v)
         cpp = statistics.median(x[1] for x in v)
-        # contacts per step = cpp x particles; particles = step / (ns per contact x cpp), the
-        # same 343 in every scene, taken from the shape's own median run
-        contacts = 1e6 * step / med if med > 0 else 0.0
+        contacts = contacts_per_step(step, med)
         budget = 10.0 * ref * contacts / 1e3  # us
-        floor = 1e3 * statistics.median(x[2] for x in rows[("floor", kind)])
+        floor_ms = median_floor(kind)
+        floor = 1e3 * floor_ms  # us
         word = verdict(med / ref, min(ns) / min(ref_runs))
         if word != "yes" and floor >= budget:
             word = "no (floor)"
-        own = 1e3 * (1e3 * step - floor) / contacts if contacts > 0 else 0.0
+        own = own_ns(step, floor_ms, contacts)
         own_ratio = f"{own / ref_own:.1f}" if ref_own > 0 else "-"
         # the ratio the floor alone would give (contacts costing nothing)
         floor_ratio = 1e3 * floor / contacts / ref if contacts > 0 else 0.0
